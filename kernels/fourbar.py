@@ -1,0 +1,145 @@
+"""Four-bar loop closure and transfer functions (linkages.md §2), shared by every mechanism.
+
+Notation (linkages.md §1): A = (0, 0) and D = (l0, 0); crank AB = l1 at angle phi1, coupler
+BC = l2 at phi2, rocker DC = l3 at phi3; assembly branch sigma = +1/-1 with
+phi3 = theta_DB + sigma*psi.
+
+Everything is written in the cancellation-free factored form of §2.1: at a change point one
+factor of P or Q vanishes exactly and keeps its full relative accuracy, where the papers'
+arccos form loses half the digits (hard case H2).
+"""
+
+import math
+
+from numba import njit
+
+#: identity bits of the three change-point families (linkages.md §2.4), l1 = 1
+CHANGE_POINT_A = 1  # lambda0 + lambda3 = 1 + lambda2, node at (phi1, phi3) = (0, 0)
+CHANGE_POINT_B = 2  # lambda0 + lambda2 = 1 + lambda3, node at (0, pi)
+CHANGE_POINT_C = 4  # lambda0 + 1 = lambda2 + lambda3, node at (pi, pi)
+
+
+@njit(cache=True, nogil=True)
+def dyad_factors(phi1, l0, l1, l2, l3):
+    """Squared distance d^2 = |DB|^2 and the closure factors P, Q of linkages.md §2.1.
+
+    P*Q = (2 l3 d sin psi)^2; the loop closes at phi1 iff P >= 0 and Q >= 0.
+    """
+    sh = math.sin(0.5 * phi1)
+    ch = math.cos(0.5 * phi1)
+    four = 4.0 * l0 * l1
+    d2 = (l0 - l1) * (l0 - l1) + four * sh * sh
+    p = (l2 + l3 - l0 - l1) * (l2 + l3 + l0 + l1) + four * ch * ch
+    q = (l0 - l1 - l2 + l3) * (l0 - l1 + l2 - l3) + four * sh * sh
+    return d2, p, q
+
+
+@njit(cache=True, nogil=True)
+def loop_closure(phi1, l0, l1, l2, l3, sigma):
+    """Coupler and rocker angles (phi2, phi3) [rad] at crank angle phi1 on branch sigma.
+
+    Returns NaN, NaN where the links cannot close (P < 0 or Q < 0). phi3 lies in (-2pi, 2pi);
+    compare angles modulo 2pi.
+    """
+    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3)
+    if p < 0.0 or q < 0.0:
+        return math.nan, math.nan
+    s1 = math.sin(phi1)
+    c1 = math.cos(phi1)
+    theta_db = math.atan2(l1 * s1, l1 * c1 - l0)
+    psi = math.atan2(math.sqrt(p * q), l3 * l3 + d2 - l2 * l2)
+    phi3 = theta_db + sigma * psi
+    cx = l0 + l3 * math.cos(phi3) - l1 * c1
+    cy = l3 * math.sin(phi3) - l1 * s1
+    phi2 = math.atan2(cy, cx)
+    return phi2, phi3
+
+
+@njit(cache=True, nogil=True)
+def transfer_ratio(phi1, l0, l1, l2, l3, sigma):
+    """Rocker transfer ratio u31 = dphi3/dphi1 in the stable closed form of linkages.md §2.3.
+
+    Exact to ~1e-15 away from a special position and to ~3e-8 at |dphi1| = 1e-8 from it;
+    NaN exactly at the special position (0/0, hard case H1) and where the loop cannot close.
+    """
+    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3)
+    if p < 0.0 or q < 0.0:
+        return math.nan
+    root = math.sqrt(p * q)
+    s1 = math.sin(phi1)
+    first = l1 * (l1 - l0 * math.cos(phi1)) / d2
+    num = l0 * l1 * s1 * (d2 + l2 * l2 - l3 * l3)
+    if root == 0.0:
+        if num == 0.0:
+            return math.nan
+        # a rocker dead position of the dyad: u31 is infinite, no motion through it
+        return math.nan
+    return first - sigma * num / (d2 * root)
+
+
+@njit(cache=True, nogil=True)
+def transfer_functions(phi1, l0, l1, l2, l3, sigma):
+    """First- and second-order transfer functions (linkages.md §2.2).
+
+    Returns (phi2, phi3, u21, u31, u21', u31') with u_k1 = dphi_k/dphi1 and
+    u'_k1 = d^2 phi_k / dphi1^2. u31 is taken from the stable form (§2.3); the second-order
+    functions divide by sin(phi3 - phi2) and are 0/0 at the special position.
+    """
+    phi2, phi3 = loop_closure(phi1, l0, l1, l2, l3, sigma)
+    if math.isnan(phi3):
+        n = math.nan
+        return n, n, n, n, n, n
+    s32 = math.sin(phi3 - phi2)
+    u31 = transfer_ratio(phi1, l0, l1, l2, l3, sigma)
+    u21 = l1 * math.sin(phi1 - phi3) / (l2 * s32)
+    du31 = (l1 * math.cos(phi1 - phi2) + l2 * u21 * u21
+            - l3 * u31 * u31 * math.cos(phi3 - phi2)) / (l3 * s32)
+    du21 = (l1 * math.cos(phi1 - phi3) + l2 * u21 * u21 * math.cos(phi2 - phi3)
+            - l3 * u31 * u31) / (l2 * s32)
+    return phi2, phi3, u21, u31, du21, du31
+
+
+@njit(cache=True, nogil=True)
+def change_point_identities(lam0, lam2, lam3, tol):
+    """Bit mask of the change-point identities that hold (l1 = 1), linkages.md §2.4.
+
+    Each identity is one way of splitting the four links into two pairs of equal sum (the
+    Grashof defect s + l - p - q = 0); tol is relative to the sum of the links.
+    """
+    scale = tol * (1.0 + lam0 + lam2 + lam3)
+    mask = 0
+    if abs(lam0 + lam3 - 1.0 - lam2) <= scale:
+        mask |= CHANGE_POINT_A
+    if abs(lam0 + lam2 - 1.0 - lam3) <= scale:
+        mask |= CHANGE_POINT_B
+    if abs(lam0 + 1.0 - lam2 - lam3) <= scale:
+        mask |= CHANGE_POINT_C
+    return mask
+
+
+@njit(cache=True, nogil=True)
+def crank_turns_fully(l0, l1, l2, l3, tol):
+    """Link 1 turns fully iff l0 + l1 <= l2 + l3 and |l0 - l1| >= |l2 - l3| (§2.5).
+
+    At a change point one inequality holds with equality, so it is tested with a tolerance
+    relative to the sum of the links; otherwise rounding would decide feasibility.
+    """
+    slack = tol * (l0 + l1 + l2 + l3)
+    return (l0 + l1 <= l2 + l3 + slack) and (abs(l0 - l1) >= abs(l2 - l3) - slack)
+
+
+@njit(cache=True, nogil=True)
+def transmission_angle(phi1, l0, l1, l2, l3, tol):
+    """Acute transmission angle (between coupler and rocker, folded to [0, pi/2]) at phi1.
+
+    A factor P or Q that is negative by less than tol*(sum of links)^2 is rounding at a
+    change point (the node itself) and is taken as 0; a larger negative one gives NaN.
+    """
+    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3)
+    slack = tol * (l0 + l1 + l2 + l3) ** 2
+    if p < -slack or q < -slack:
+        return math.nan
+    p = max(p, 0.0)
+    q = max(q, 0.0)
+    mu = math.atan2(math.sqrt(p * q), l2 * l2 + l3 * l3 - d2)
+    return min(mu, math.pi - mu)

@@ -1,0 +1,141 @@
+"""Atlas metadata (CF attributes, provenance) and the atomic netCDF writer (atlas.md §2)."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import platform
+import subprocess
+import sys
+from importlib import metadata
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+import sweep as _pkg
+from kernels.status import FLAG_MEANINGS
+from sweep.errors import UserError
+
+CONVENTIONS = "CF-1.10"
+
+
+def package_versions() -> dict[str, str]:
+    out = {"python": platform.python_version()}
+    for name in ("impact-sweep", "numpy", "numba", "llvmlite", "xarray", "dask", "netCDF4",
+                 "pydantic", "click"):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = "not installed"
+    return out
+
+
+def code_version() -> str:
+    """Package version, plus the git commit (and '-dirty') when run from a checkout."""
+    here = Path(__file__).resolve().parent.parent
+    try:
+        rev = subprocess.run(["git", "-C", str(here), "describe", "--always", "--dirty",
+                              "--abbrev=12"], capture_output=True, text=True, timeout=5)
+        if rev.returncode == 0 and rev.stdout.strip():
+            return f"{_pkg.__version__}+git.{rev.stdout.strip()}"
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return _pkg.__version__
+
+
+def flag_attributes(flags: tuple[str, ...]) -> dict:
+    values = np.array([FLAG_MEANINGS.index(f) for f in flags], dtype=np.int8)
+    return {"long_name": "status of the grid point", "units": "1",
+            "flag_values": values, "flag_meanings": " ".join(flags)}
+
+
+def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
+    """Attach CF attributes, provenance and netCDF encodings to a (lazy) atlas."""
+    mech = sweep.mechanism
+    for axis in sweep.axes:
+        p = axis.parameter
+        ds[axis.name].attrs.update(units=p.units, long_name=p.long_name)
+    by_name = {o.name: o for o in mech.outputs}
+    level = sweep.run.compress_level
+    for name in sweep.outputs:
+        o = by_name[name]
+        ds[name].attrs.update(units=o.units, long_name=o.long_name,
+                              ancillary_variables="status")
+        if o.description:
+            ds[name].attrs["comment"] = o.description
+        ds[name].encoding.update(zlib=level > 0, complevel=level, shuffle=True,
+                                 chunksizes=chunk_shape, _FillValue=np.nan)
+    ds["status"].attrs.update(flag_attributes(mech.flags))
+    ds["status"].encoding.update(zlib=level > 0, complevel=level, chunksizes=chunk_shape,
+                                 _FillValue=None)
+    for axis in sweep.axes:
+        ds[axis.name].encoding["_FillValue"] = None
+        if axis.parameter.choices is not None:
+            # fixed-width chars, not HDF5 variable-length strings: reopening a file with
+            # vlen strings after closing another handle on it segfaults (xarray #8289)
+            ds[axis.name].encoding["dtype"] = "S1"
+    ds.attrs.update(
+        Conventions=CONVENTIONS,
+        title=sweep.title,
+        institution="impact-sweep",
+        source=f"impact-sweep {_pkg.__version__}, mechanism {mech.name}",
+        mechanism=mech.name,
+        spec=sweep.spec_json(),
+        method=json.dumps({"model": mech.method_text, **sweep.method}),
+        package_versions=json.dumps(package_versions()),
+        code_version=code_version(),
+    )
+    return ds
+
+
+def history_line(argv: list[str] | None = None) -> str:
+    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    args = " ".join(argv if argv is not None else ["sweep"] + sys.argv[1:])
+    return f"{now}: {args}"
+
+
+def check_target(path: Path, force: bool) -> None:
+    """Refuse, before any compute, to overwrite an atlas or to write where we cannot."""
+    if path.exists() and not force:
+        raise UserError(f"output: {path} exists; use --force to overwrite it")
+    if path.is_dir():
+        raise UserError(f"output: {path} is a directory")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise UserError(f"output: directory {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise UserError(f"output: directory {parent} is not writable")
+
+
+def write_atomic(ds: xr.Dataset, path: Path, progress: bool = True,
+                 workers: int | None = None) -> None:
+    """Compute and write the atlas to a temporary name beside ``path``, then rename.
+
+    An interrupted or failed run leaves no atlas and no temporary file behind.
+    """
+    import dask
+    from dask.diagnostics import ProgressBar
+
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        with dask.config.set(scheduler="threads", num_workers=workers or os.cpu_count()):
+            if progress:
+                with ProgressBar(minimum=1.5, dt=0.5, out=sys.stderr):
+                    ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4")
+            else:
+                ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4")
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def status_counts(ds: xr.Dataset) -> dict[str, int]:
+    status = ds["status"]
+    values = [int(v) for v in np.atleast_1d(status.attrs["flag_values"])]
+    meanings = status.attrs["flag_meanings"].split()
+    counts = np.bincount(np.asarray(status.values, dtype=np.int64).ravel(),
+                         minlength=len(FLAG_MEANINGS))
+    return {m: int(counts[v]) for v, m in zip(values, meanings)}

@@ -1,0 +1,80 @@
+"""Design charts from an atlas: matplotlib PNG with units on the axes and colour bar."""
+
+from __future__ import annotations
+
+import platform
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from sweep.errors import UserError
+
+
+def _label(ds: xr.Dataset, name: str) -> str:
+    attrs = ds[name].attrs
+    units = attrs.get("units", "")
+    units = "-" if units in ("1", "") else units
+    long_name = attrs.get("long_name", name)
+    return f"{name} [{units}]\n{long_name}" if len(long_name) < 60 else f"{name} [{units}]"
+
+
+def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
+                 ok_only: bool = True) -> Path:
+    """Colour map of ``color`` over (x, y), one panel per value of each other grid axis
+    of more than one value (categories such as ``type``); non-ok points are left blank."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    for axis, name in (("x", x), ("y", y), ("color", color)):
+        if name not in ds.variables:
+            raise UserError(f"{axis}: unknown variable {name!r}; allowed: "
+                            + ", ".join(sorted(map(str, ds.variables))))
+    if ds[color].dtype.kind in "OUS":
+        raise UserError(f"color: {color!r} is categorical; pick a numeric variable")
+    dims = list(ds["status"].dims)
+    facet_dims = [d for d in dims if d not in (x, y) and ds.sizes[d] > 1]
+    if len(facet_dims) > 1:
+        raise UserError(f"chart: more than one other axis to panel over ({', '.join(facet_dims)});"
+                        " select a slice first")
+    panels = [None] if not facet_dims else list(range(ds.sizes[facet_dims[0]]))
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels) + 1.2, 4.4),
+                             squeeze=False, constrained_layout=True)
+    values = ds[color].where(ds["status"] == 0) if ok_only else ds[color]
+    finite = np.asarray(values.values)[np.isfinite(np.asarray(values.values, dtype=float))]
+    vmin, vmax = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
+    mesh = None
+    for ax, k in zip(axes[0], panels):
+        sub = ds if k is None else ds.isel({facet_dims[0]: k})
+        val = values if k is None else values.isel({facet_dims[0]: k})
+        sub = sub.squeeze(drop=False)
+        val = val.squeeze(drop=False)
+        if x in sub.dims and y in sub.dims:
+            mesh = ax.pcolormesh(sub[x].values, sub[y].values,
+                                 val.transpose(y, x).values, vmin=vmin, vmax=vmax,
+                                 shading="nearest", cmap="viridis")
+        else:
+            xs = sub[x].broadcast_like(val).values.ravel()
+            ys = sub[y].broadcast_like(val).values.ravel()
+            mesh = ax.scatter(xs, ys, c=val.values.ravel(), vmin=vmin, vmax=vmax, s=8,
+                              cmap="viridis")
+        ax.set_facecolor("0.9")
+        ax.set_xlabel(_label(ds, x))
+        ax.set_ylabel(_label(ds, y))
+        if k is not None:
+            ax.set_title(f"{facet_dims[0]} = {ds[facet_dims[0]].values[k]}")
+        if y in ds.dims and ds[y].size > 2:
+            yv = ds[y].values
+            if np.all(yv > 0) and yv[-1] / yv[0] > 5 and np.allclose(np.diff(np.log(yv)),
+                                                                      np.log(yv[1] / yv[0])):
+                ax.set_yscale("log")
+    bar = fig.colorbar(mesh, ax=axes[0].tolist())
+    bar.set_label(_label(ds, color))
+    fig.suptitle(f"{ds.attrs.get('title', '')}\nblank: status not ok; "
+                 f"made on {platform.node() or 'unknown host'} ({platform.machine()})",
+                 fontsize=8)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out

@@ -1,0 +1,207 @@
+"""The ``sweep`` command line (atlas.md §4): run, examples, info, query, chart.
+
+Exit status 0 on success, 2 on bad input (one line naming the field), 1 on a failure inside.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from importlib import resources
+from pathlib import Path
+
+import click
+
+from sweep.errors import UserError
+
+EXAMPLES = {"crank_rocker": "crank_rocker.toml"}
+DEFAULT_EXAMPLE = "crank_rocker"
+
+
+def _example_text(name: str) -> str:
+    return resources.files("sweep.examples").joinpath(EXAMPLES[name]).read_text("utf-8")
+
+
+def _open_atlas(path: str):
+    import xarray as xr
+
+    p = Path(path)
+    if not p.is_file():
+        raise UserError(f"atlas: no such file: {p}")
+    try:
+        ds = xr.open_dataset(p, engine="netcdf4")
+    except Exception as err:  # netCDF4 raises OSError/RuntimeError/ValueError alike
+        raise UserError(f"atlas: {p} is not a readable netCDF file ({type(err).__name__})") \
+            from None
+    if "status" not in ds or "mechanism" not in ds.attrs:
+        raise UserError(f"atlas: {p} is not an impact-sweep atlas (no status or mechanism)")
+    return ds
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="impact-sweep")
+def cli():
+    """Batch sweeps of impact mechanisms into CF-annotated netCDF design atlases."""
+
+
+@cli.command()
+@click.argument("spec_file", required=False, metavar="[SPEC]")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="atlas file (.nc)")
+@click.option("--force", is_flag=True, help="overwrite an existing atlas")
+@click.option("--chunk", type=click.IntRange(1, 10**8), help="points per task")
+@click.option("--workers", type=click.IntRange(1, 1024), help="threads (default: all cores)")
+@click.option("-q", "--quiet", is_flag=True, help="no progress bar or summary")
+def run(spec_file, output, force, chunk, workers, quiet):
+    """Run a sweep; with no SPEC, the built-in default (the crank-rocker design atlas)."""
+    from sweep import atlas, engine, spec
+
+    if spec_file is None:
+        sweep_spec = spec.parse(_example_text(DEFAULT_EXAMPLE), source="default spec")
+        target = Path(output or f"{DEFAULT_EXAMPLE}_atlas.nc")
+    else:
+        sweep_spec = spec.load(spec_file)
+        target = Path(output or Path(spec_file).with_suffix(".nc").name)
+    if target.suffix != ".nc":
+        raise UserError(f"output: {target} must end in .nc")
+    atlas.check_target(target, force)
+    chart_path = target.with_suffix(".png") if sweep_spec.chart else None
+    if chart_path is not None and chart_path.exists() and not force:
+        raise UserError(f"output: {chart_path} exists; use --force to overwrite it")
+
+    started = time.perf_counter()
+    ds = engine.build(sweep_spec, chunk=chunk)
+    ds.attrs["history"] = atlas.history_line()
+    atlas.write_atomic(ds, target, progress=not quiet, workers=workers or sweep_spec.run.workers)
+    elapsed = time.perf_counter() - started
+    written = _open_atlas(str(target))
+    if chart_path is not None:
+        from sweep.chart import design_chart
+
+        c = sweep_spec.chart
+        design_chart(written, c.x, c.y, c.color, chart_path)
+    if not quiet:
+        counts = atlas.status_counts(written)
+        click.echo(f"atlas: {target.resolve()}")
+        if chart_path is not None:
+            click.echo(f"chart: {chart_path.resolve()}")
+        click.echo(f"{sweep_spec.size} points in {elapsed:.2f} s; status: "
+                   + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
+    written.close()
+
+
+@cli.command()
+@click.argument("name", required=False)
+@click.option("-o", "--output", type=click.Path(dir_okay=False), help="write the TOML here")
+def examples(name, output):
+    """List the built-in specs, or print (or write) one of them as TOML."""
+    if name is None:
+        from sweep import registry
+
+        for key in sorted(EXAMPLES):
+            click.echo(f"{key:16s} {registry.get(key).title}")
+        return
+    if name not in EXAMPLES:
+        raise UserError(f"name: unknown example {name!r}; allowed: {', '.join(EXAMPLES)}")
+    text = _example_text(name)
+    if output:
+        if Path(output).exists():
+            raise UserError(f"output: {output} exists")
+        Path(output).write_text(text, encoding="utf-8")
+        click.echo(f"wrote {output}")
+    else:
+        click.echo(text, nl=False)
+
+
+@cli.command()
+@click.argument("atlas_file", metavar="ATLAS")
+def info(atlas_file):
+    """Dimensions, variables with units, status counts and provenance of an atlas."""
+    import json
+
+    from sweep.atlas import status_counts
+
+    ds = _open_atlas(atlas_file)
+    click.echo(f"{atlas_file}: {ds.attrs.get('title', '')}")
+    click.echo(f"mechanism: {ds.attrs['mechanism']}")
+    click.echo("dimensions: " + ", ".join(f"{d} ({n})" for d, n in ds.sizes.items()))
+    for name in list(ds.coords) + list(ds.data_vars):
+        v = ds[name]
+        kind = "coord" if name in ds.coords else "var  "
+        click.echo(f"  {kind} {name:30s} [{v.attrs.get('units', '?')}] "
+                   f"{v.attrs.get('long_name', '')}")
+    counts = status_counts(ds)
+    total = sum(counts.values())
+    click.echo("status: " + ", ".join(f"{k} {v} ({100 * v / total:.1f}%)"
+                                      for k, v in counts.items() if v))
+    click.echo(f"code version: {ds.attrs.get('code_version', '?')}")
+    versions = json.loads(ds.attrs.get("package_versions", "{}"))
+    click.echo("packages: " + ", ".join(f"{k} {v}" for k, v in versions.items()))
+    click.echo(f"method: {ds.attrs.get('method', '?')}")
+    click.echo(f"history: {ds.attrs.get('history', '?')}")
+
+
+@cli.command()
+@click.argument("atlas_file", metavar="ATLAS")
+@click.option("--where", "where", default=None, help='condition, e.g. "lambda2 <= 3"')
+@click.option("--sort", default=None, help="variable to sort by (ascending)")
+@click.option("--limit", type=click.IntRange(1, None), default=None, help="at most N rows")
+@click.option("--columns", default=None, help="comma-separated variables to show")
+@click.option("--format", "fmt", type=click.Choice(["table", "csv", "json"]), default="table")
+def query(atlas_file, where, sort, limit, columns, fmt):
+    """Select designs from an atlas with a safe expression language."""
+    from sweep.query import parse, select
+
+    if where is not None:
+        parse(where)  # syntax errors before the atlas is read
+    ds = _open_atlas(atlas_file)
+    cols = [c.strip() for c in columns.split(",") if c.strip()] if columns else None
+    frame = select(ds, where, sort=sort, limit=limit, columns=cols)
+    if fmt == "csv":
+        click.echo(frame.to_csv(index=False), nl=False)
+    elif fmt == "json":
+        click.echo(frame.to_json(orient="records", double_precision=15))
+    else:
+        click.echo(frame.to_string(index=False) if len(frame) else "no matching points")
+
+
+@cli.command()
+@click.argument("atlas_file", metavar="ATLAS")
+@click.option("--x", "x", required=True, help="variable on the x axis")
+@click.option("--y", "y", required=True, help="variable on the y axis")
+@click.option("--color", required=True, help="variable shown in colour")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default="chart.png")
+@click.option("--all-status", is_flag=True, help="also colour points whose status is not ok")
+def chart(atlas_file, x, y, color, output, all_status):
+    """Design chart (PNG) of COLOR over X and Y, with units."""
+    from sweep.chart import design_chart
+
+    if not output.endswith(".png"):
+        raise UserError(f"output: {output} must end in .png")
+    ds = _open_atlas(atlas_file)
+    path = design_chart(ds, x, y, color, Path(output), ok_only=not all_status)
+    click.echo(f"chart: {path.resolve()}")
+
+
+def main(argv: list[str] | None = None) -> None:
+    try:
+        cli.main(args=argv, prog_name="sweep", standalone_mode=False)
+    except UserError as err:
+        click.echo(f"sweep: error: {err}", err=True)
+        sys.exit(2)
+    except click.exceptions.Exit as err:
+        sys.exit(err.exit_code)
+    except click.ClickException as err:
+        msg = " ".join(err.format_message().split())
+        click.echo(f"sweep: error: {msg}", err=True)
+        sys.exit(2)
+    except (KeyboardInterrupt, click.exceptions.Abort):
+        click.echo("sweep: interrupted; nothing was written", err=True)
+        sys.exit(130)
+    except Exception as err:  # a failure inside: one line, the traceback on request
+        if os.environ.get("SWEEP_DEBUG"):
+            raise
+        click.echo(f"sweep: internal error: {type(err).__name__}: {err} "
+                   "(set SWEEP_DEBUG=1 for the traceback)", err=True)
+        sys.exit(1)
+    sys.exit(0)

@@ -1,0 +1,3 @@
+"""Registry entries, one module per mechanism. Importing this package registers them all."""
+
+from sweep.mechanisms import crank_rocker  # noqa: F401

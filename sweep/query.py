@@ -1,0 +1,189 @@
+"""A small, safe expression language over atlas variables and coordinates.
+
+``restitution_kinematic > -0.32 and lambda2 <= 3 and type == "a" and status == "ok"``
+
+The text is parsed with Python's ``ast`` (parsing runs no code) and only a whitelist of node
+types is evaluated by the interpreter below: names of atlas variables and coordinates, number
+and string literals, arithmetic, comparisons, and/or/not, and a few numeric functions. No
+attribute access, subscripts, calls to anything else, or ``eval``: the language cannot reach
+Python builtins, objects or files.
+"""
+
+from __future__ import annotations
+
+import ast
+import operator
+
+import numpy as np
+import xarray as xr
+
+from sweep.errors import UserError
+
+MAX_LENGTH = 2000
+MAX_NODES = 500
+
+_BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul,
+           ast.Div: operator.truediv, ast.Pow: operator.pow, ast.Mod: operator.mod}
+_COMPARE = {ast.Eq: operator.eq, ast.NotEq: operator.ne, ast.Lt: operator.lt,
+            ast.LtE: operator.le, ast.Gt: operator.gt, ast.GtE: operator.ge}
+_FUNCTIONS = {"abs": np.abs, "sqrt": np.sqrt, "log": np.log, "log10": np.log10,
+              "exp": np.exp, "isnan": np.isnan, "isfinite": np.isfinite,
+              "degrees": np.degrees, "radians": np.radians}
+
+
+def _flag_code(var: xr.DataArray, label: str):
+    meanings = var.attrs["flag_meanings"].split()
+    if label not in meanings:
+        raise UserError(f"where: {var.name} has no flag {label!r}; allowed: "
+                        + ", ".join(meanings))
+    return np.atleast_1d(var.attrs["flag_values"])[meanings.index(label)]
+
+
+class _Evaluator:
+    def __init__(self, ds: xr.Dataset):
+        self.ds = ds
+
+    def value(self, node):
+        if isinstance(node, ast.Expression):
+            return self.value(node.body)
+        if isinstance(node, ast.Constant):
+            v = node.value
+            if isinstance(v, bool) or not isinstance(v, (int, float, str)):
+                raise UserError(f"where: literal {v!r} is not allowed; use numbers or "
+                                "quoted strings")
+            return v if isinstance(v, str) else np.float64(v)
+        if isinstance(node, ast.Name):
+            if node.id not in self.ds.variables:
+                raise UserError(f"where: unknown name {node.id!r}; allowed: "
+                                + ", ".join(sorted(map(str, self.ds.variables))))
+            return self.ds[node.id]
+        if isinstance(node, ast.BoolOp):
+            parts = [self._boolean(self.value(v)) for v in node.values]
+            out = parts[0]
+            for p in parts[1:]:
+                out = (out & p) if isinstance(node.op, ast.And) else (out | p)
+            return out
+        if isinstance(node, ast.UnaryOp):
+            operand = self.value(node.operand)
+            if isinstance(node.op, ast.Not):
+                return ~self._boolean(operand)
+            if isinstance(node.op, ast.USub):
+                return -self._number(operand)
+            if isinstance(node.op, ast.UAdd):
+                return self._number(operand)
+        if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
+            left, right = self._number(self.value(node.left)), self._number(self.value(node.right))
+            with np.errstate(all="ignore"):
+                return _BINARY[type(node.op)](left, right)
+        if isinstance(node, ast.Compare):
+            left = self.value(node.left)
+            result = None
+            for op, right_node in zip(node.ops, node.comparators):
+                if type(op) not in _COMPARE:
+                    raise UserError("where: only ==, !=, <, <=, >, >= compare")
+                right = self.value(right_node)
+                a, b = self._comparable(left, right)
+                part = _COMPARE[type(op)](a, b)
+                result = part if result is None else (result & part)
+                left = right
+            return result
+        if isinstance(node, ast.Call):
+            if (not isinstance(node.func, ast.Name) or node.func.id not in _FUNCTIONS
+                    or node.keywords or len(node.args) != 1):
+                raise UserError("where: allowed functions take one argument: "
+                                + ", ".join(_FUNCTIONS))
+            with np.errstate(all="ignore"):
+                return _FUNCTIONS[node.func.id](self._number(self.value(node.args[0])))
+        raise UserError(f"where: {type(node).__name__} is not allowed in a query")
+
+    def _comparable(self, a, b):
+        # a string compared with a flag variable means its flag meaning: status == "ok"
+        for x, y, swap in ((a, b, False), (b, a, True)):
+            if isinstance(x, xr.DataArray) and "flag_meanings" in x.attrs and isinstance(y, str):
+                code = _flag_code(x, y)
+                return (code, x) if swap else (x, code)
+        for x in (a, b):
+            if isinstance(x, str):
+                other = b if x is a else a
+                if not (isinstance(other, xr.DataArray) and other.dtype.kind in "OUS"):
+                    raise UserError(f"where: string {x!r} compared with a number")
+        return a, b
+
+    @staticmethod
+    def _number(v):
+        if isinstance(v, str):
+            raise UserError(f"where: string {v!r} used as a number")
+        if isinstance(v, xr.DataArray) and v.dtype.kind in "OUS":
+            raise UserError(f"where: {v.name} is categorical; compare it with == \"...\"")
+        return v
+
+    @staticmethod
+    def _boolean(v):
+        if isinstance(v, xr.DataArray) and v.dtype == bool:
+            return v
+        if isinstance(v, (bool, np.bool_)):
+            return v
+        raise UserError("where: and/or/not need comparisons on both sides")
+
+
+def parse(expr: str) -> ast.Expression:
+    if len(expr) > MAX_LENGTH:
+        raise UserError(f"where: expression longer than {MAX_LENGTH} characters")
+    try:
+        tree = ast.parse(expr, mode="eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError) as err:
+        msg = getattr(err, "msg", None) or type(err).__name__
+        raise UserError(f"where: not a valid expression ({msg})") from None
+    if sum(1 for _ in ast.walk(tree)) > MAX_NODES:
+        raise UserError(f"where: expression has more than {MAX_NODES} parts")
+    return tree
+
+
+def evaluate(ds: xr.Dataset, expr: str) -> xr.DataArray:
+    """Boolean mask over the atlas grid (broadcast to all grid dims)."""
+    tree = parse(expr)
+    try:
+        mask = _Evaluator(ds).value(tree)
+    except RecursionError:
+        raise UserError("where: expression nested too deeply") from None
+    if not (isinstance(mask, xr.DataArray) and mask.dtype == bool):
+        raise UserError("where: the expression must be a condition, e.g. \"x > 1\"")
+    dims = [d for d in ds["status"].dims]
+    return mask.broadcast_like(ds["status"]).transpose(*dims)
+
+
+def select(ds: xr.Dataset, where: str | None, sort: str | None = None,
+           limit: int | None = None, columns: list[str] | None = None):
+    """Rows (a pandas DataFrame) of the grid points that satisfy ``where``."""
+    import pandas as pd
+
+    if sort is not None and sort not in ds.variables:
+        raise UserError(f"sort: unknown variable {sort!r}")
+    columns = columns or [str(v) for v in ds.data_vars]
+    for c in columns:
+        if c not in ds.variables:
+            raise UserError(f"columns: unknown variable {c!r}")
+    dims = list(ds["status"].dims)
+    if where:
+        mask = np.asarray(evaluate(ds, where).values)
+    else:
+        mask = np.ones(ds["status"].shape, dtype=bool)
+    index = np.nonzero(mask)
+    data = {}
+    for j, dim in enumerate(dims):
+        data[dim] = np.asarray(ds[dim].values)[index[j]]
+    for c in columns:
+        if c in dims:
+            continue
+        v = ds[c].broadcast_like(ds["status"]).transpose(*dims).values
+        data[c] = np.asarray(v)[index]
+    frame = pd.DataFrame(data)
+    if "status" in frame and "flag_meanings" in ds["status"].attrs:
+        codes = np.atleast_1d(ds["status"].attrs["flag_values"]).astype(int)
+        names = dict(zip(codes, ds["status"].attrs["flag_meanings"].split()))
+        frame["status"] = frame["status"].map(lambda v: names.get(int(v), str(v)))
+    if sort is not None:
+        frame = frame.sort_values(sort, kind="stable")
+    if limit is not None:
+        frame = frame.head(limit)
+    return frame

@@ -1,0 +1,134 @@
+"""Spec validation and the CLI: bad input gives exit 2, one line naming the key, no files."""
+
+import subprocess
+import sys
+
+import pytest
+
+from sweep.cli import main
+
+GOOD = '''
+mechanism = "crank_rocker"
+[grid]
+R = {start = 0.1, stop = 0.3, num = 3}
+largest_link = [2.5, 3.0]
+'''
+
+# (spec text, a word the one-line message must contain)
+MALFORMED = [
+    ('mechanism = "crank_rocker"\n[grid]\nR = {start = 0.1, stop = 0.3, num = 0}\nlargest_link = [3.0]', "grid.R.num"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = {start = 0.1, stop = 0.3}\nlargest_link = [3.0]', "grid.R.num"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = {start = 0.1, stop = 1.3, num = 4}\nlargest_link = [3.0]', "grid.R"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = {start = 0.1, stop = nan, num = 4}\nlargest_link = [3.0]', "grid.R"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = {start = 0.1, stop = inf, num = 4}\nlargest_link = [3.0]', "grid.R"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = {start = 0.2, stop = 0.2, num = 4}\nlargest_link = [3.0]', "grid.R"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = []\nlargest_link = [3.0]', "grid.R"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = [0.1, 0.1]\nlargest_link = [3.0]', "grid.R"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = ["0.1"]\nlargest_link = [3.0]', "grid.R"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = {start = 0.1, stop = 0.3, num = 3, scale = "cubic"}\nlargest_link = [3.0]', "grid.R.scale"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = {start = -0.1, stop = 0.3, num = 3, scale = "log"}\nlargest_link = [3.0]', "grid.R"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = {start = 0.1, stop = 0.3, num = 3, step = 1}\nlargest_link = [3.0]', "grid.R.step"),
+    ('mechanism = "crank_rocker"\n[grid]\nwobble = [1.0]', "grid.wobble"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[fixed]\nwobble = 1.0', "fixed.wobble"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[fixed]\nlargest_link = 2.0', "largest_link"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[fixed]\nomega1 = 0.0', "fixed.omega1"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[fixed]\ncrank_length = -0.1', "fixed.crank_length"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[fixed]\nsigma = 2', "fixed.sigma"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\ntype = ["a", "d"]', "grid.type"),
+    ('mechanism = "crank_rocker"\n[grid]\ntype = {start = 0, stop = 1, num = 2}\nlargest_link = [3.0]', "grid.type"),
+    ('mechanism = "crank_rocker"\n[grid]\nR = [0.2, 0.3]', "largest_link"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[fixed]\nlambda2 = 2.0', "lambda2"),
+    ('mechanism = "crank_rocker"\n[grid]\ntype = ["general"]\n[fixed]\nlambda0 = 2.0\nlambda2 = 3.0', "lambda3"),
+    ('mechanism = "crank_rocker"\n[grid]\ntype = ["b"]\n[fixed]\nlambda0 = 5.0\nlargest_link = 14.0', "largest_link"),
+    ('mechanism = "crank_rocker"\noutputs = ["rocker_speed"]\n[grid]\nlargest_link = [3.0]', "outputs"),
+    ('mechanism = "crank_rocker"\noutputs = []\n[grid]\nlargest_link = [3.0]', "outputs"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[method]\ngeometry_tol = -1.0', "method.geometry_tol"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[method]\nrtol = 1e-9', "method.rtol"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[run]\nchunk = 0', "run.chunk"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[run]\nscheduler = "tcp://x:1"', "run.scheduler"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = [3.0]\n[chart]\nx = "R"\ny = "largest_link"\ncolor = "gamma"', "chart.x"),
+    ('mechanism = "gearbox"\n[grid]\nx = [1.0]', "mechanism"),
+    ('mechanism = "crank_rocker"', "grid"),
+    ('mechanism = "crank_rocker"\n[grid]', "grid"),
+    ('mechanism = "crank_rocker"\ncolour = "red"\n[grid]\nlargest_link = [3.0]', "colour"),
+    ('mechanism = "crank_rocker"\n[grid\nlargest_link = [3.0]', "invalid TOML"),
+    ('mechanism = 3\n[grid]\nlargest_link = [3.0]', "mechanism"),
+    ('mechanism = "crank_rocker"\n[grid]\nlargest_link = {start = 1.0, stop = 2.0, num = 100000}\nR = {start = 0.1, stop = 0.3, num = 100000}\nomega1 = {start = 1.0, stop = 2.0, num = 100000}', "grid"),
+]
+
+
+@pytest.mark.parametrize("text, key", MALFORMED, ids=[str(i) for i in range(len(MALFORMED))])
+def test_malformed_spec_rejected_with_one_line_and_nothing_written(tmp_path, capsys, text, key):
+    spec = tmp_path / "bad.toml"
+    spec.write_text(text)
+    atlas = tmp_path / "bad.nc"
+    with pytest.raises(SystemExit) as exit_info:
+        main(["run", str(spec), "-o", str(atlas), "-q"])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("sweep: error: ") and key in lines[0], lines[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]
+
+
+def test_corpus_is_large_enough():
+    assert len(MALFORMED) >= 20
+
+
+@pytest.mark.parametrize("argv, key", [
+    (["run", "no/such/spec.toml"], "no such file"),
+    (["run", "--chunk", "0"], "--chunk"),
+    (["run", "--bogus"], "--bogus"),
+    (["frobnicate"], "frobnicate"),
+    (["query", "missing.nc", "--where", "x > 1"], "atlas"),
+    (["examples", "nope"], "nope"),
+])
+def test_bad_cli_arguments_exit_2_with_one_line(capsys, tmp_path, monkeypatch, argv, key):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exit_info.value.code == 2 and len(err) == 1 and key in err[0], err
+    assert not list(tmp_path.glob("*.nc"))
+
+
+def test_existing_atlas_is_not_overwritten_without_force(tmp_path, capsys):
+    spec = tmp_path / "s.toml"
+    spec.write_text(GOOD)
+    atlas = tmp_path / "s.nc"
+    atlas.write_text("precious")
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(spec), "-o", str(atlas), "-q"])
+    assert e.value.code == 2 and "--force" in capsys.readouterr().err
+    assert atlas.read_text() == "precious"
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(spec), "-o", str(atlas), "-q", "--force"])
+    assert e.value.code == 0
+
+
+def test_console_entry_points_run_the_default_sweep(tmp_path):
+    """As a user would: python -m sweep run (the built-in default) writes atlas + chart."""
+    out = subprocess.run([sys.executable, "-m", "sweep", "run", "-o", "default.nc"],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert (tmp_path / "default.nc").stat().st_size > 0
+    assert (tmp_path / "default.png").read_bytes()[:4] == b"\x89PNG"
+    assert "atlas:" in out.stdout and "chart:" in out.stdout
+    bad = subprocess.run([sys.executable, "-m", "sweep", "run", "nope.toml"], cwd=tmp_path,
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1
+    info = subprocess.run([sys.executable, "-m", "sweep", "info", "default.nc"], cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert info.returncode == 0 and "status: ok" in info.stdout
+
+
+def test_examples_list_and_write(tmp_path, capsys):
+    with pytest.raises(SystemExit) as e:
+        main(["examples"])
+    assert e.value.code == 0 and "crank_rocker" in capsys.readouterr().out
+    target = tmp_path / "cr.toml"
+    with pytest.raises(SystemExit) as e:
+        main(["examples", "crank_rocker", "-o", str(target)])
+    from sweep import spec
+    assert spec.load(target).mechanism.name == "crank_rocker"
