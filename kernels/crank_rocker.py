@@ -13,13 +13,14 @@ import numpy as np
 from numba import njit
 
 from kernels import status as st
+from kernels import KERNEL_OPTIONS
 from kernels.fourbar import (
     CHANGE_POINT_A,
     CHANGE_POINT_B,
     CHANGE_POINT_C,
     change_point_identities,
     crank_turns_fully,
-    transmission_angle,
+    transmission_angle_half,
 )
 
 PARAMETERS = (
@@ -51,27 +52,27 @@ O_BRANCH, O_PHI_STAR = _O["assembly_branch"], _O["special_crank_angle"]
 O_COUNT, O_RK_MAX = _O["special_position_count"], _O["restitution_kinematic_max"]
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def gamma_from_restitution(r):
     """gamma = (1 + R)/(1 - R): the value of sqrt(lambda0 lambda2/lambda3) that gives Rk = -R."""
     return (1.0 + r) / (1.0 - r)
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def synthesize_largest_rod(lam2, r):
     """Type a (eq. 10 of seed 000): given lambda2 and R, return (lambda0, lambda3)."""
     g2 = gamma_from_restitution(r) ** 2
     return g2 * (lam2 + 1.0) / (g2 + lam2), lam2 * (lam2 + 1.0) / (g2 + lam2)
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def synthesize_largest_base(lam0, r):
     """Type c (eq. 11 of seed 000): given lambda0 and R, return (lambda2, lambda3)."""
     g2 = gamma_from_restitution(r) ** 2
     return g2 * (lam0 + 1.0) / (g2 + lam0), lam0 * (lam0 + 1.0) / (g2 + lam0)
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def synthesize_largest_rocker(lam3, r, larger_base, tol):
     """Type b (derived, linkages.md §3.1): lambda0, lambda2 are the roots of
     t^2 - (1 + lambda3) t + gamma^2 lambda3 = 0. Returns (lambda0, lambda2), NaN if complex.
@@ -92,7 +93,7 @@ def synthesize_largest_rocker(lam3, r, larger_base, tol):
     return small, big
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def synthesize_largest_rocker_from_base(lam0, r):
     """Type b given lambda0: lambda3 = l0(l0-1)/(l0-g^2), lambda2 = g^2(l0-1)/(l0-g^2).
 
@@ -109,31 +110,30 @@ def synthesize_largest_rocker_from_base(lam0, r):
     return lam2, lam3
 
 
-@njit(cache=True, nogil=True)
-def branch_values(kind, lam0, lam2, lam3, sigma, direction):
+@njit(**KERNEL_OPTIONS)
+def branch_values(kind, lam0, gamma, sigma, direction):
     """One-sided transfer ratios (u31 before, u31 after) at the special position (§2.4).
 
-    kind is CHANGE_POINT_A/B/C, sigma the assembly branch, direction the sign of omega1.
-    From the series expansion: u31(phi1* +- 0) = (1 + kappa sigma sgn(eps) gamma)/D with
-    kappa = -1 for b, +1 otherwise, D = 1 - lambda0 (a, b) or 1 + lambda0 (c). The crank
-    approaches phi1* from the side -direction.
+    kind is CHANGE_POINT_A/B/C, gamma = sqrt(lambda0 lambda2/lambda3), sigma the assembly
+    branch, direction the sign of omega1. From the series expansion:
+    u31(phi1* +- 0) = (1 + kappa sigma sgn(eps) gamma)/D with kappa = -1 for b, +1 otherwise,
+    D = 1 - lambda0 (a, b) or 1 + lambda0 (c). The crank approaches phi1* from the side
+    -direction.
     """
-    g = math.sqrt(lam0 * lam2 / lam3)
     kappa = -1.0 if kind == CHANGE_POINT_B else 1.0
-    den = 1.0 + lam0 if kind == CHANGE_POINT_C else 1.0 - lam0
-    before = (1.0 - kappa * sigma * direction * g) / den
-    after = (1.0 + kappa * sigma * direction * g) / den
-    return before, after
+    inv_den = 1.0 / (1.0 + lam0 if kind == CHANGE_POINT_C else 1.0 - lam0)
+    s = kappa * sigma * direction * gamma
+    return (1.0 - s) * inv_den, (1.0 + s) * inv_den
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def impact_branch(kind, direction):
     """The assembly branch sigma that gives |Rk| < 1 for this change point and rotation."""
     kappa = -1.0 if kind == CHANGE_POINT_B else 1.0
     return -kappa * direction
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def _first_identity(mask):
     if mask & CHANGE_POINT_A:
         return CHANGE_POINT_A
@@ -144,108 +144,119 @@ def _first_identity(mask):
     return 0
 
 
-@njit(cache=True, nogil=True)
-def _point(params, i, out, tol):
-    """Evaluate grid point i; write its outputs into out[:, i] and return its status."""
-    for k in range(out.shape[0]):
-        out[k, i] = math.nan
-    kind_code = int(params[P_TYPE, i])
-    r = params[P_R, i]
-    big = params[P_L, i]
-    l1 = params[P_L1, i]
-    w = params[P_W, i]
+@njit(**KERNEL_OPTIONS)
+def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code, tol):
+    """Evaluate one grid point. Returns (status, outputs in the order of OUTPUTS).
+
+    Works on local scalars and returns everything at once, so the block loop writes each
+    output exactly once; NaN stands for a value that does not exist at this point.
+    """
+    nan = math.nan
+    lam0 = lam2 = lam3 = gamma = rk = before = after = ratio = speed = nan
+    turns_out = mu_min = mu_opp = branch = phi_star = count_out = rk_max = nan
     direction = 1.0 if w > 0.0 else -1.0
-
-    # 1. geometry: echo, or synthesis with Rk = -R (seed 000 eqs. 10, 11; §3.1 for b)
-    if kind_code == TYPE_A:
-        lam2 = big
-        lam0, lam3 = synthesize_largest_rod(lam2, r)
-        kind = CHANGE_POINT_A
-    elif kind_code == TYPE_C:
-        lam0 = big
-        lam2, lam3 = synthesize_largest_base(lam0, r)
-        kind = CHANGE_POINT_C
-    elif kind_code == TYPE_B:
-        kind = CHANGE_POINT_B
-        if not math.isnan(params[P_LAM0, i]):
-            lam0 = params[P_LAM0, i]
-            lam2, lam3 = synthesize_largest_rocker_from_base(lam0, r)
+    status = st.OK
+    for _ in range(1):  # a single pass; "break" ends it early with the status set
+        # 1. geometry: echo, or synthesis with Rk = -R (seed 000 eqs. 10, 11; §3.1 for b)
+        if kind_code == TYPE_A:
+            lam2 = big
+            lam0, lam3 = synthesize_largest_rod(lam2, r)
+            kind = CHANGE_POINT_A
+        elif kind_code == TYPE_C:
+            lam0 = big
+            lam2, lam3 = synthesize_largest_base(lam0, r)
+            kind = CHANGE_POINT_C
+        elif kind_code == TYPE_B:
+            kind = CHANGE_POINT_B
+            if not math.isnan(lam0_in):
+                lam0 = lam0_in
+                lam2, lam3 = synthesize_largest_rocker_from_base(lam0, r)
+            else:
+                lam3 = big
+                lam0, lam2 = synthesize_largest_rocker(lam3, r, root == ROOT_LARGER_BASE, tol)
+            if lam3 > 0.0:
+                g_max = (1.0 + lam3) / (2.0 * math.sqrt(lam3))
+                rk_max = (g_max - 1.0) / (g_max + 1.0)
+            if math.isnan(lam0) or math.isnan(lam2) or math.isnan(lam3):
+                lam0 = lam2 = lam3 = nan
+                status = st.NO_REAL_SYNTHESIS
+                break
         else:
-            lam3 = big
-            larger = int(params[P_ROOT, i]) == ROOT_LARGER_BASE
-            lam0, lam2 = synthesize_largest_rocker(lam3, r, larger, tol)
-        if lam3 > 0.0:
-            g_max = (1.0 + lam3) / (2.0 * math.sqrt(lam3))
-            out[O_RK_MAX, i] = (g_max - 1.0) / (g_max + 1.0)
-        if math.isnan(lam0) or math.isnan(lam2):
-            return st.NO_REAL_SYNTHESIS
-    else:
-        lam0 = params[P_LAM0, i]
-        lam2 = params[P_LAM2, i]
-        lam3 = params[P_LAM3, i]
-        kind = 0
-    out[O_LAM0, i] = lam0
-    out[O_LAM2, i] = lam2
-    out[O_LAM3, i] = lam3
+            lam0, lam2, lam3 = lam0_in, lam2_in, lam3_in
+            kind = 0
 
-    # 2. change points: every one on the turn, not only the impact one (H10)
-    mask = change_point_identities(lam0, lam2, lam3, tol)
-    count = (mask & 1) + ((mask >> 1) & 1) + ((mask >> 2) & 1)
-    out[O_COUNT, i] = count
-    if kind == 0:
-        kind = _first_identity(mask)
+        # 2. change points: every one on the turn, not only the impact one (H10)
+        mask = change_point_identities(lam0, lam2, lam3, tol)
+        count = (mask & 1) + ((mask >> 1) & 1) + ((mask >> 2) & 1)
+        count_out = count
+        if kind == 0:
+            kind = _first_identity(mask)
 
-    # 3. full-turn feasibility (§2.5) and transmission angles at the two dead centres
-    turns = crank_turns_fully(lam0, 1.0, lam2, lam3, tol)
-    out[O_TURNS, i] = 1.0 if turns else 0.0
-    if turns:
-        mu0 = transmission_angle(0.0, lam0, 1.0, lam2, lam3, tol)
-        mu_pi = transmission_angle(math.pi, lam0, 1.0, lam2, lam3, tol)
-        out[O_MU_MIN, i] = min(mu0, mu_pi)
-    if kind != 0:
-        out[O_GAMMA, i] = math.sqrt(lam0 * lam2 / lam3)
-        phi_star = math.pi if kind == CHANGE_POINT_C else 0.0
-        out[O_PHI_STAR, i] = phi_star
+        # 3. full-turn feasibility (§2.5) and transmission angles at the two dead centres;
+        # at a dead centre that is a change point all links are collinear: mu = 0 exactly
+        # (evaluating it there would return sqrt(rounding) ~ 1e-8)
+        turns = crank_turns_fully(lam0, 1.0, lam2, lam3, tol)
+        turns_out = 1.0 if turns else 0.0
+        mu0 = mu_pi = nan
         if turns:
-            out[O_MU_OPP, i] = mu0 if phi_star == math.pi else mu_pi
-        # B coincides with D at the node: one branch slope is infinite (H9)
-        if kind != CHANGE_POINT_C and abs(lam0 - 1.0) <= tol * (1.0 + lam0 + lam2 + lam3):
-            return st.DEGENERATE
-    if not turns:
-        out[O_MU_OPP, i] = math.nan
-        return st.NOT_ASSEMBLABLE
-    if kind == 0:
-        return st.NO_SPECIAL_POSITION
+            if mask & (CHANGE_POINT_A | CHANGE_POINT_B):
+                mu0 = 0.0
+            else:
+                mu0 = transmission_angle_half(0.0, 1.0, lam0, 1.0, lam2, lam3, tol)
+            if mask & CHANGE_POINT_C:
+                mu_pi = 0.0
+            else:
+                mu_pi = transmission_angle_half(1.0, 0.0, lam0, 1.0, lam2, lam3, tol)
+            mu_min = min(mu0, mu_pi)
+        if kind != 0:
+            gamma = math.sqrt(lam0 * lam2 / lam3)
+            phi_star = math.pi if kind == CHANGE_POINT_C else 0.0
+            if turns:
+                mu_opp = mu0 if kind == CHANGE_POINT_C else mu_pi
+            # B coincides with D at the node: one branch slope is infinite (H9)
+            if kind != CHANGE_POINT_C and abs(lam0 - 1.0) <= tol * (1.0 + lam0 + lam2 + lam3):
+                status = st.DEGENERATE
+                break
+        if not turns:
+            status = st.NOT_ASSEMBLABLE
+            break
+        if kind == 0:
+            status = st.NO_SPECIAL_POSITION
+            break
 
-    # 4. branch values, Rk and the impact speed on the chosen assembly branch
-    sigma_code = params[P_SIGMA, i]
-    sigma = impact_branch(kind, direction) if sigma_code == SIGMA_IMPACT else sigma_code
-    before, after = branch_values(kind, lam0, lam2, lam3, sigma, direction)
-    out[O_BRANCH, i] = sigma
-    out[O_BEFORE, i] = before
-    out[O_AFTER, i] = after
-    out[O_RK, i] = after / before
-    out[O_RATIO, i] = abs(before)
-    out[O_SPEED, i] = abs(before) * abs(w) * lam3 * l1
-
-    for k in range(out.shape[0]):
-        if k != O_RK_MAX and k != O_MU_OPP and not math.isfinite(out[k, i]):
-            return st.NONFINITE
-    if not (out[O_GAMMA, i] > 1.0):
-        return st.NO_IMPACT
-    if sigma != impact_branch(kind, direction):
-        return st.WRONG_BRANCH
-    if count > 1:
-        return st.SECOND_SPECIAL_POSITION
-    return st.OK
+        # 4. branch values, Rk and the impact speed on the chosen assembly branch
+        impact_sigma = impact_branch(kind, direction)
+        sigma = impact_sigma if sigma_code == SIGMA_IMPACT else sigma_code
+        before, after = branch_values(kind, lam0, gamma, sigma, direction)
+        branch = sigma
+        rk = after / before
+        ratio = abs(before)
+        speed = ratio * abs(w) * lam3 * l1
+        if not (math.isfinite(rk) and math.isfinite(before) and math.isfinite(after)
+                and math.isfinite(speed) and math.isfinite(gamma) and math.isfinite(mu_min)):
+            status = st.NONFINITE
+        elif not (gamma > 1.0):
+            status = st.NO_IMPACT
+        elif sigma != impact_sigma:
+            status = st.WRONG_BRANCH
+        elif count > 1:
+            status = st.SECOND_SPECIAL_POSITION
+    return status, (lam0, lam2, lam3, gamma, rk, before, after, ratio, speed, turns_out,
+                    mu_min, mu_opp, branch, phi_star, count_out, rk_max)
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def crank_rocker_block(params, method, out, status):
     """Evaluate a block of grid points: params (n_params, n), out (n_outputs, n), status (n,)."""
     tol = method[0]
     for i in range(params.shape[1]):
-        status[i] = _point(params, i, out, tol)
+        code, values = _point(int(params[P_TYPE, i]), params[P_R, i], params[P_L, i],
+                              params[P_LAM0, i], params[P_LAM2, i], params[P_LAM3, i],
+                              int(params[P_ROOT, i]), params[P_L1, i], params[P_W, i],
+                              params[P_SIGMA, i], tol)
+        status[i] = code
+        for k in range(len(values)):
+            out[k, i] = values[k]
 
 
 def crank_rocker_run(params, method):

@@ -13,20 +13,27 @@ import math
 
 from numba import njit
 
+from kernels import KERNEL_OPTIONS
+from kernels.elementary import atan_fast
+
 #: identity bits of the three change-point families (linkages.md §2.4), l1 = 1
 CHANGE_POINT_A = 1  # lambda0 + lambda3 = 1 + lambda2, node at (phi1, phi3) = (0, 0)
 CHANGE_POINT_B = 2  # lambda0 + lambda2 = 1 + lambda3, node at (0, pi)
 CHANGE_POINT_C = 4  # lambda0 + 1 = lambda2 + lambda3, node at (pi, pi)
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def dyad_factors(phi1, l0, l1, l2, l3):
     """Squared distance d^2 = |DB|^2 and the closure factors P, Q of linkages.md §2.1.
 
     P*Q = (2 l3 d sin psi)^2; the loop closes at phi1 iff P >= 0 and Q >= 0.
     """
-    sh = math.sin(0.5 * phi1)
-    ch = math.cos(0.5 * phi1)
+    return dyad_factors_half(math.sin(0.5 * phi1), math.cos(0.5 * phi1), l0, l1, l2, l3)
+
+
+@njit(**KERNEL_OPTIONS)
+def dyad_factors_half(sh, ch, l0, l1, l2, l3):
+    """dyad_factors from sh = sin(phi1/2), ch = cos(phi1/2): exact at the dead centres."""
     four = 4.0 * l0 * l1
     d2 = (l0 - l1) * (l0 - l1) + four * sh * sh
     p = (l2 + l3 - l0 - l1) * (l2 + l3 + l0 + l1) + four * ch * ch
@@ -34,7 +41,7 @@ def dyad_factors(phi1, l0, l1, l2, l3):
     return d2, p, q
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def loop_closure(phi1, l0, l1, l2, l3, sigma):
     """Coupler and rocker angles (phi2, phi3) [rad] at crank angle phi1 on branch sigma.
 
@@ -55,7 +62,7 @@ def loop_closure(phi1, l0, l1, l2, l3, sigma):
     return phi2, phi3
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def transfer_ratio(phi1, l0, l1, l2, l3, sigma):
     """Rocker transfer ratio u31 = dphi3/dphi1 in the stable closed form of linkages.md §2.3.
 
@@ -77,7 +84,7 @@ def transfer_ratio(phi1, l0, l1, l2, l3, sigma):
     return first - sigma * num / (d2 * root)
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def transfer_functions(phi1, l0, l1, l2, l3, sigma):
     """First- and second-order transfer functions (linkages.md §2.2).
 
@@ -99,7 +106,7 @@ def transfer_functions(phi1, l0, l1, l2, l3, sigma):
     return phi2, phi3, u21, u31, du21, du31
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def change_point_identities(lam0, lam2, lam3, tol):
     """Bit mask of the change-point identities that hold (l1 = 1), linkages.md §2.4.
 
@@ -117,7 +124,7 @@ def change_point_identities(lam0, lam2, lam3, tol):
     return mask
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def crank_turns_fully(l0, l1, l2, l3, tol):
     """Link 1 turns fully iff l0 + l1 <= l2 + l3 and |l0 - l1| >= |l2 - l3| (§2.5).
 
@@ -128,18 +135,27 @@ def crank_turns_fully(l0, l1, l2, l3, tol):
     return (l0 + l1 <= l2 + l3 + slack) and (abs(l0 - l1) >= abs(l2 - l3) - slack)
 
 
-@njit(cache=True, nogil=True)
+@njit(**KERNEL_OPTIONS)
 def transmission_angle(phi1, l0, l1, l2, l3, tol):
     """Acute transmission angle (between coupler and rocker, folded to [0, pi/2]) at phi1.
 
     A factor P or Q that is negative by less than tol*(sum of links)^2 is rounding at a
     change point (the node itself) and is taken as 0; a larger negative one gives NaN.
     """
-    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3)
+    return transmission_angle_half(math.sin(0.5 * phi1), math.cos(0.5 * phi1),
+                                   l0, l1, l2, l3, tol)
+
+
+@njit(**KERNEL_OPTIONS)
+def transmission_angle_half(sh, ch, l0, l1, l2, l3, tol):
+    """transmission_angle from sin and cos of phi1/2 (exact 0/1 at the dead centres)."""
+    d2, p, q = dyad_factors_half(sh, ch, l0, l1, l2, l3)
     slack = tol * (l0 + l1 + l2 + l3) ** 2
     if p < -slack or q < -slack:
         return math.nan
-    p = max(p, 0.0)
     q = max(q, 0.0)
-    mu = math.atan2(math.sqrt(p * q), l2 * l2 + l3 * l3 - d2)
+    if p <= 0.0:
+        return 0.0  # coupler and rocker folded back on each other: mu = pi, folded 0
+    # tan(mu/2) = sin(mu)/(1 + cos(mu)) = sqrt(Q/P), since 2 l2 l3 + l2^2 + l3^2 - d^2 = P
+    mu = 2.0 * atan_fast(math.sqrt(q / p))
     return min(mu, math.pi - mu)

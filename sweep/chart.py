@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import platform
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -15,8 +16,8 @@ def _label(ds: xr.Dataset, name: str) -> str:
     attrs = ds[name].attrs
     units = attrs.get("units", "")
     units = "-" if units in ("1", "") else units
-    long_name = attrs.get("long_name", name)
-    return f"{name} [{units}]\n{long_name}" if len(long_name) < 60 else f"{name} [{units}]"
+    long_name = textwrap.fill(attrs.get("long_name", name), 48)
+    return f"{name} [{units}]\n{long_name}"
 
 
 def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
@@ -24,6 +25,7 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     """Colour map of ``color`` over (x, y), one panel per value of each other grid axis
     of more than one value (categories such as ``type``); non-ok points are left blank."""
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -45,6 +47,15 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     values = ds[color].where(ds["status"] == 0) if ok_only else ds[color]
     finite = np.asarray(values.values)[np.isfinite(np.asarray(values.values, dtype=float))]
     vmin, vmax = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
+    # values spanning decades (transfer ratios, speeds) read better on a log colour scale
+    norm = (matplotlib.colors.LogNorm(vmin=vmin, vmax=vmax)
+            if finite.size and vmin > 0 and vmax / vmin > 20 else
+            matplotlib.colors.Normalize(vmin=vmin, vmax=vmax))
+    if isinstance(norm, matplotlib.colors.LogNorm):
+        levels = matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)).tick_values(vmin, vmax)
+    else:
+        levels = matplotlib.ticker.MaxNLocator(8).tick_values(vmin, vmax)
+    levels = levels[(levels > vmin) & (levels < vmax)]
     mesh = None
     for ax, k in zip(axes[0], panels):
         sub = ds if k is None else ds.isel({facet_dims[0]: k})
@@ -52,14 +63,17 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
         sub = sub.squeeze(drop=False)
         val = val.squeeze(drop=False)
         if x in sub.dims and y in sub.dims:
-            mesh = ax.pcolormesh(sub[x].values, sub[y].values,
-                                 val.transpose(y, x).values, vmin=vmin, vmax=vmax,
+            grid = val.transpose(y, x).values
+            mesh = ax.pcolormesh(sub[x].values, sub[y].values, grid, norm=norm,
                                  shading="nearest", cmap="viridis")
+            if np.isfinite(grid).sum() > 4 and len(levels):
+                lines = ax.contour(sub[x].values, sub[y].values, grid, levels=levels,
+                                   norm=norm, colors="white", linewidths=0.6)
+                ax.clabel(lines, fontsize=7, fmt="%.3g")
         else:
             xs = sub[x].broadcast_like(val).values.ravel()
             ys = sub[y].broadcast_like(val).values.ravel()
-            mesh = ax.scatter(xs, ys, c=val.values.ravel(), vmin=vmin, vmax=vmax, s=8,
-                              cmap="viridis")
+            mesh = ax.scatter(xs, ys, c=val.values.ravel(), norm=norm, s=8, cmap="viridis")
         ax.set_facecolor("0.9")
         ax.set_xlabel(_label(ds, x))
         ax.set_ylabel(_label(ds, y))

@@ -138,3 +138,19 @@ def test_query_and_chart_cli(tmp_path, reference, capsys):
         main(["chart", path, "--x", "lambda0", "--y", "lambda2", "--color", "gamma",
               "-o", str(png)])
     assert e.value.code == 2
+
+
+def test_atlas_can_be_reopened_after_another_handle_closed(tmp_path):
+    """Regression: categorical coords as HDF5 vlen strings made a reopen segfault
+    (xarray #8289). Run in a subprocess so a crash fails the test instead of pytest."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "r.nc"
+    write(tmp_path, "r.nc").close()
+    code = (f"import xarray as xr\np = {str(path)!r}\na = xr.open_dataset(p)\n"
+            "b = xr.open_dataset(p); b.status.values; b.close()\n"
+            "c = xr.open_dataset(p); print(list(c.type.values), int(a.status.sum()))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-500:]
+    assert out.stdout.startswith("['a', 'b', 'c']")

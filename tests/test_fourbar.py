@@ -190,3 +190,12 @@ def test_property_loop_residual_or_honest_nan(l0, l1, l2, l3, phi1, sigma):
         assert d > l2 + l3 - 1e-12 or d < abs(l2 - l3) + 1e-12
     else:
         assert residual(phi1, phi2, phi3, l0, l1, l2, l3) <= 1e-13 * (l0 + l1 + l2 + l3)
+
+
+def test_kernels_do_not_raise_on_division_by_zero():
+    # B on D at phi1 = 0 (l0 = l1): d = 0; numba's python error model would raise here
+    assert math.isnan(fb.transfer_ratio(0.0, 1.0, 1.0, 2.0, 2.0, 1.0)) or \
+        not math.isfinite(fb.transfer_ratio(0.0, 1.0, 1.0, 2.0, 2.0, 1.0))
+    fb.transfer_functions(0.0, 1.0, 1.0, 2.0, 2.0, 1.0)
+    from kernels.crank_rocker import branch_values
+    assert not math.isfinite(branch_values(fb.CHANGE_POINT_A, 1.0, 1.0, -1.0, 1.0)[0])

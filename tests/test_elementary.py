@@ -1,0 +1,34 @@
+"""The kernels' own atan2 against libm (math.atan2), in ulp."""
+
+import math
+
+import numpy as np
+import pytest
+
+from kernels.elementary import atan2_fast, atan_fast
+
+
+def ulp_error(a, b):
+    return abs(a - b) / math.ulp(abs(b)) if b != 0 else abs(a) / 5e-324
+
+
+def test_atan_fast_within_2_ulp_on_random_and_edge_inputs():
+    rng = np.random.default_rng(0)
+    xs = np.concatenate([rng.uniform(-1, 1, 20000), 10 ** rng.uniform(-12, 12, 20000),
+                         -(10 ** rng.uniform(-12, 12, 20000)),
+                         [0.0, 0.66, 0.66 + 1e-16, 2.414213562373095, 2.4142135623730954,
+                          1.0, -1.0, 1e308, -1e308, 5e-324]])
+    worst = max(ulp_error(atan_fast(float(x)), math.atan(float(x))) for x in xs)
+    assert worst <= 2.0, worst
+    assert atan_fast(math.inf) == pytest.approx(math.pi / 2, rel=1e-16)
+
+
+def test_atan2_fast_quadrants_and_accuracy():
+    rng = np.random.default_rng(1)
+    y = rng.normal(size=20000) * 10 ** rng.uniform(-6, 6, 20000)
+    x = rng.normal(size=20000) * 10 ** rng.uniform(-6, 6, 20000)
+    worst = max(ulp_error(atan2_fast(a, b), math.atan2(a, b)) for a, b in zip(y, x))
+    assert worst <= 3.0, worst
+    for a, b in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, -1.0),
+                 (-1.0, -1.0), (0.0, 0.0), (1e-300, 1.0), (1.0, 1e-300)]:
+        assert atan2_fast(a, b) == pytest.approx(math.atan2(a, b), abs=4e-16)
