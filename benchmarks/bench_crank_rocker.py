@@ -146,7 +146,7 @@ def kernel_vs_numpy():
     t = time.perf_counter()
     cr.crank_rocker_run(p[:, :10], method)
     first_call = time.perf_counter() - t  # cached compilation (or load from cache)
-    ref_out, ref_status = cr.crank_rocker_run(p, method)
+    ref_out, ref_status, _ = cr.crank_rocker_run(p, method)
     np_out, np_status = numpy_crank_rocker(p, 1e-9)
     assert np.array_equal(ref_status, np_status), "numpy baseline disagrees on status"
     assert np.allclose(ref_out, np_out, rtol=1e-12, atol=0, equal_nan=True), \

@@ -260,9 +260,9 @@ def crank_rocker_block(params, method, out, status):
 
 
 def crank_rocker_run(params, method):
-    """Allocate the outputs and run the block kernel (the registry's entry point)."""
+    """Registry entry point: (outputs, status, profiles); this mechanism has no profiles."""
     n = params.shape[1]
     out = np.empty((len(OUTPUTS), n))
     status = np.empty(n, dtype=np.int8)
     crank_rocker_block(params, method, out, status)
-    return out, status
+    return out, status, np.empty((0, n, 0))

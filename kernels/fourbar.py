@@ -23,32 +23,47 @@ CHANGE_POINT_C = 4  # lambda0 + 1 = lambda2 + lambda3, node at (pi, pi)
 
 
 @njit(**KERNEL_OPTIONS)
-def dyad_factors(phi1, l0, l1, l2, l3):
+def dyad_factors(phi1, l0, l1, l2, l3, snap=0.0):
     """Squared distance d^2 = |DB|^2 and the closure factors P, Q of linkages.md §2.1.
 
     P*Q = (2 l3 d sin psi)^2; the loop closes at phi1 iff P >= 0 and Q >= 0.
+
+    snap: a constant factor smaller than snap*(sum of links) is taken as exactly 0, i.e. a
+    linkage classified as a change point is modelled as an exact one. Without it, lengths
+    rounded to binary (l1 = 0.1 m) leave a residual ~1e-17 that unfolds the node into an
+    avoided crossing: u31 drifts by 5e-4 at 1e-6 rad and u'31 grows like 1/dphi1^2.
     """
-    return dyad_factors_half(math.sin(0.5 * phi1), math.cos(0.5 * phi1), l0, l1, l2, l3)
+    return dyad_factors_half(math.sin(0.5 * phi1), math.cos(0.5 * phi1), l0, l1, l2, l3, snap)
 
 
 @njit(**KERNEL_OPTIONS)
-def dyad_factors_half(sh, ch, l0, l1, l2, l3):
+def dyad_factors_half(sh, ch, l0, l1, l2, l3, snap=0.0):
     """dyad_factors from sh = sin(phi1/2), ch = cos(phi1/2): exact at the dead centres."""
     four = 4.0 * l0 * l1
+    limit = snap * (l0 + l1 + l2 + l3)
+    fp = l2 + l3 - l0 - l1
+    fq1 = l0 - l1 - l2 + l3
+    fq2 = l0 - l1 + l2 - l3
+    if abs(fp) <= limit:
+        fp = 0.0
+    if abs(fq1) <= limit:
+        fq1 = 0.0
+    if abs(fq2) <= limit:
+        fq2 = 0.0
     d2 = (l0 - l1) * (l0 - l1) + four * sh * sh
-    p = (l2 + l3 - l0 - l1) * (l2 + l3 + l0 + l1) + four * ch * ch
-    q = (l0 - l1 - l2 + l3) * (l0 - l1 + l2 - l3) + four * sh * sh
+    p = fp * (l2 + l3 + l0 + l1) + four * ch * ch
+    q = fq1 * fq2 + four * sh * sh
     return d2, p, q
 
 
 @njit(**KERNEL_OPTIONS)
-def loop_closure(phi1, l0, l1, l2, l3, sigma):
+def loop_closure(phi1, l0, l1, l2, l3, sigma, snap=0.0):
     """Coupler and rocker angles (phi2, phi3) [rad] at crank angle phi1 on branch sigma.
 
     Returns NaN, NaN where the links cannot close (P < 0 or Q < 0). phi3 lies in (-2pi, 2pi);
-    compare angles modulo 2pi.
+    compare angles modulo 2pi. snap: see dyad_factors.
     """
-    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3)
+    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3, snap)
     if p < 0.0 or q < 0.0:
         return math.nan, math.nan
     s1 = math.sin(phi1)
@@ -63,13 +78,13 @@ def loop_closure(phi1, l0, l1, l2, l3, sigma):
 
 
 @njit(**KERNEL_OPTIONS)
-def transfer_ratio(phi1, l0, l1, l2, l3, sigma):
+def transfer_ratio(phi1, l0, l1, l2, l3, sigma, snap=0.0):
     """Rocker transfer ratio u31 = dphi3/dphi1 in the stable closed form of linkages.md §2.3.
 
     Exact to ~1e-15 away from a special position and to ~3e-8 at |dphi1| = 1e-8 from it;
     NaN exactly at the special position (0/0, hard case H1) and where the loop cannot close.
     """
-    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3)
+    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3, snap)
     if p < 0.0 or q < 0.0:
         return math.nan
     root = math.sqrt(p * q)
@@ -85,19 +100,19 @@ def transfer_ratio(phi1, l0, l1, l2, l3, sigma):
 
 
 @njit(**KERNEL_OPTIONS)
-def transfer_functions(phi1, l0, l1, l2, l3, sigma):
+def transfer_functions(phi1, l0, l1, l2, l3, sigma, snap=0.0):
     """First- and second-order transfer functions (linkages.md §2.2).
 
     Returns (phi2, phi3, u21, u31, u21', u31') with u_k1 = dphi_k/dphi1 and
     u'_k1 = d^2 phi_k / dphi1^2. u31 is taken from the stable form (§2.3); the second-order
     functions divide by sin(phi3 - phi2) and are 0/0 at the special position.
     """
-    phi2, phi3 = loop_closure(phi1, l0, l1, l2, l3, sigma)
+    phi2, phi3 = loop_closure(phi1, l0, l1, l2, l3, sigma, snap)
     if math.isnan(phi3):
         n = math.nan
         return n, n, n, n, n, n
     s32 = math.sin(phi3 - phi2)
-    u31 = transfer_ratio(phi1, l0, l1, l2, l3, sigma)
+    u31 = transfer_ratio(phi1, l0, l1, l2, l3, sigma, snap)
     u21 = l1 * math.sin(phi1 - phi3) / (l2 * s32)
     du31 = (l1 * math.cos(phi1 - phi2) + l2 * u21 * u21
             - l3 * u31 * u31 * math.cos(phi3 - phi2)) / (l3 * s32)

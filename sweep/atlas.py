@@ -45,10 +45,22 @@ def code_version() -> str:
     return _pkg.__version__
 
 
-def flag_attributes(flags: tuple[str, ...]) -> dict:
+def flag_attributes(flags: tuple[str, ...], usable: tuple[str, ...] = ()) -> dict:
     values = np.array([FLAG_MEANINGS.index(f) for f in flags], dtype=np.int8)
     return {"long_name": "status of the grid point", "units": "1",
-            "flag_values": values, "flag_meanings": " ".join(flags)}
+            "flag_values": values, "flag_meanings": " ".join(flags),
+            "usable_flags": " ".join(("ok",) + tuple(usable)),
+            "comment": "usable_flags: statuses whose outputs are design values"}
+
+
+def usable_mask(ds: xr.Dataset) -> xr.DataArray:
+    """True where a point's outputs are design values (status in usable_flags)."""
+    status = ds["status"]
+    meanings = status.attrs["flag_meanings"].split()
+    values = np.atleast_1d(status.attrs["flag_values"])
+    usable = status.attrs.get("usable_flags", "ok").split()
+    codes = [int(values[meanings.index(m)]) for m in usable if m in meanings]
+    return status.isin(codes)
 
 
 def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
@@ -57,17 +69,22 @@ def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
     for axis in sweep.axes:
         p = axis.parameter
         ds[axis.name].attrs.update(units=p.units, long_name=p.long_name)
-    by_name = {o.name: o for o in mech.outputs}
+    by_name = {o.name: o for o in mech.outputs + mech.profiles}
     level = sweep.run.compress_level
+    if mech.profile_dim is not None and mech.profile_dim.name in ds.coords:
+        pdim = mech.profile_dim
+        ds[pdim.name].attrs.update(units=pdim.units, long_name=pdim.long_name)
+        ds[pdim.name].encoding["_FillValue"] = None
     for name in sweep.outputs:
         o = by_name[name]
         ds[name].attrs.update(units=o.units, long_name=o.long_name,
                               ancillary_variables="status")
         if o.description:
             ds[name].attrs["comment"] = o.description
+        chunks = chunk_shape + tuple(ds.sizes[d] for d in ds[name].dims[len(chunk_shape):])
         ds[name].encoding.update(zlib=level > 0, complevel=level, shuffle=True,
-                                 chunksizes=chunk_shape, _FillValue=np.nan)
-    ds["status"].attrs.update(flag_attributes(mech.flags))
+                                 chunksizes=chunks, _FillValue=np.nan)
+    ds["status"].attrs.update(flag_attributes(mech.flags, mech.usable_flags))
     ds["status"].encoding.update(zlib=level > 0, complevel=level, chunksizes=chunk_shape,
                                  _FillValue=None)
     for axis in sweep.axes:

@@ -44,7 +44,9 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     panels = [None] if not facet_dims else list(range(ds.sizes[facet_dims[0]]))
     fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels) + 1.2, 4.4),
                              squeeze=False, constrained_layout=True)
-    values = ds[color].where(ds["status"] == 0) if ok_only else ds[color]
+    from sweep.atlas import usable_mask
+
+    values = ds[color].where(usable_mask(ds)) if ok_only else ds[color]
     finite = np.asarray(values.values)[np.isfinite(np.asarray(values.values, dtype=float))]
     vmin, vmax = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
     # values spanning decades (transfer ratios, speeds) read better on a log colour scale
@@ -86,9 +88,57 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                 ax.set_yscale("log")
     bar = fig.colorbar(mesh, ax=axes[0].tolist())
     bar.set_label(_label(ds, color))
-    fig.suptitle(f"{ds.attrs.get('title', '')}\nblank: status not ok; "
+    fig.suptitle(f"{ds.attrs.get('title', '')}\nblank: no design value (status); "
                  f"made on {platform.node() or 'unknown host'} ({platform.machine()})",
                  fontsize=8)
     fig.savefig(out, dpi=110)
     plt.close(fig)
     return out
+
+
+def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path) -> tuple:
+    """Profiles of ``names`` over the profile dimension at the first grid point matching
+    ``where``; a symmetric-log y axis shows a 1/dphi1 spike and the rest of the cycle."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sweep.query import evaluate
+
+    if not names:
+        raise UserError("vars: give at least one profile variable")
+    grid_dims = list(ds["status"].dims)
+    for name in names:
+        if name not in ds.data_vars:
+            raise UserError(f"vars: unknown variable {name!r}")
+        extra = [d for d in ds[name].dims if d not in grid_dims]
+        if len(extra) != 1:
+            raise UserError(f"vars: {name} is not a profile (it has no extra dimension)")
+    pdim = [d for d in ds[names[0]].dims if d not in grid_dims][0]
+    mask = evaluate(ds, where).values if where else np.ones(ds["status"].shape, bool)
+    hits = np.argwhere(mask)
+    if not len(hits):
+        raise UserError("where: no grid point matches")
+    at = {d: int(i) for d, i in zip(grid_dims, hits[0])}
+    point = ds.isel(at)
+    fig, ax = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
+    x = point[pdim].values
+    scale = []
+    for name in names:
+        y = point[name].values
+        ax.plot(x, y, lw=1.0, label=f"{name}: {point[name].attrs.get('long_name', '')}")
+        scale.append(np.nanmedian(np.abs(y)))
+    ax.set_yscale("symlog", linthresh=max(1e-12, float(np.nanmax(scale))))
+    ax.set_xlabel(_label(ds, pdim))
+    units = {point[n].attrs.get("units", "") for n in names}
+    ax.set_ylabel(f"[{', '.join(sorted(units))}] (symmetric log)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    where_text = ", ".join(f"{d} = {point[d].values:.4g}" if point[d].dtype.kind == "f"
+                           else f"{d} = {point[d].values}" for d in grid_dims)
+    ax.set_title(f"{ds.attrs.get('title', '')}\nat {where_text}; made on "
+                 f"{platform.node() or 'unknown host'} ({platform.machine()})", fontsize=8)
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out, where_text

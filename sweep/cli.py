@@ -15,7 +15,7 @@ import click
 
 from sweep.errors import UserError
 
-EXAMPLES = {"crank_rocker": "crank_rocker.toml"}
+EXAMPLES = {"crank_rocker": "crank_rocker.toml", "linkage_forces": "linkage_forces.toml"}
 DEFAULT_EXAMPLE = "crank_rocker"
 
 
@@ -181,6 +181,26 @@ def chart(atlas_file, x, y, color, output, all_status):
     ds = _open_atlas(atlas_file)
     path = design_chart(ds, x, y, color, Path(output), ok_only=not all_status)
     click.echo(f"chart: {path.resolve()}")
+
+
+@cli.command()
+@click.argument("atlas_file", metavar="ATLAS")
+@click.option("--vars", "names", required=True, help="comma-separated profile variables")
+@click.option("--where", default=None, help="condition picking the grid point (first match)")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default="profile.png")
+def profile(atlas_file, names, where, output):
+    """Chart of profiles (e.g. joint reactions over crank_angle) at one grid point."""
+    from sweep.chart import profile_chart
+    from sweep.query import parse
+
+    if not output.endswith(".png"):
+        raise UserError(f"output: {output} must end in .png")
+    if where is not None:
+        parse(where)
+    ds = _open_atlas(atlas_file)
+    path, at = profile_chart(ds, [n.strip() for n in names.split(",") if n.strip()], where,
+                             Path(output))
+    click.echo(f"profile at {at}: {path.resolve()}")
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -52,34 +52,53 @@ def block_parameters(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarra
 
 
 def run_block(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
-    """Selected outputs and status of one block, stacked as (n_selected + 1, *block_shape)."""
+    """Selected outputs, status and profiles of one block, stacked as
+    (n_scalar + 1 + n_profile * n_angle, *block_shape)."""
     bshape = tuple(stop - start for start, stop in location)
     method = np.array(list(sweep.method.values()), dtype=np.float64)
-    out, status = sweep.mechanism.run(block_parameters(sweep, location), method)
+    out, status, prof = sweep.mechanism.run(block_parameters(sweep, location), method)
     names = [o.name for o in sweep.mechanism.outputs]
-    rows = [names.index(name) for name in sweep.outputs]
-    result = np.empty((len(rows) + 1,) + bshape)
-    result[:-1] = out[rows].reshape((len(rows),) + bshape)
-    result[-1] = status.reshape(bshape)
+    rows = [names.index(name) for name in sweep.scalar_outputs]
+    pnames = [o.name for o in sweep.mechanism.profiles]
+    prows = [pnames.index(name) for name in sweep.profile_outputs]
+    n_ang = prof.shape[2]
+    result = np.empty((len(rows) + 1 + len(prows) * n_ang,) + bshape)
+    result[:len(rows)] = out[rows].reshape((len(rows),) + bshape)
+    result[len(rows)] = status.reshape(bshape)
+    for k, row in enumerate(prows):
+        start = len(rows) + 1 + k * n_ang
+        result[start:start + n_ang] = prof[row].T.reshape((n_ang,) + bshape)
     return result
 
 
 def build(sweep: Sweep, chunk: int | None = None) -> xr.Dataset:
     """The atlas as a lazy (dask-backed) Dataset; nothing is computed here."""
     shape = sweep.shape
-    chunk_shape = choose_chunks(shape, chunk or sweep.run.chunk)
+    angles = sweep.profile_coordinate()
+    n_ang = angles.shape[0]
+    n_out = len(sweep.scalar_outputs)
+    n_prof = len(sweep.profile_outputs)
+    # a block's memory grows with the profile length: keep it near the requested size
+    target = max(1, (chunk or sweep.run.chunk) * (n_out + 1) // (n_out + 1 + n_prof * n_ang))
+    chunk_shape = choose_chunks(shape, target)
     chunks = da.core.normalize_chunks(chunk_shape, shape)
-    n_out = len(sweep.outputs)
 
     def block(block_info=None):
         location = block_info[None]["array-location"][1:]
         return run_block(sweep, location)
 
-    stacked = da.map_blocks(block, chunks=((n_out + 1,),) + chunks, dtype=np.float64,
+    rows = n_out + 1 + n_prof * n_ang
+    stacked = da.map_blocks(block, chunks=((rows,),) + chunks, dtype=np.float64,
                             meta=np.empty((0,) * (len(shape) + 1)), name="kernel")
     dims = [axis.name for axis in sweep.axes]
     coords = {axis.name: (axis.name, axis.values) for axis in sweep.axes}
-    data = {name: (dims, stacked[k]) for k, name in enumerate(sweep.outputs)}
+    data = {name: (dims, stacked[k]) for k, name in enumerate(sweep.scalar_outputs)}
     data["status"] = (dims, stacked[n_out].astype(np.int8))
+    if n_prof:
+        pdim = sweep.mechanism.profile_dim.name
+        coords[pdim] = (pdim, angles)
+        for k, name in enumerate(sweep.profile_outputs):
+            start = n_out + 1 + k * n_ang
+            data[name] = (dims + [pdim], da.moveaxis(stacked[start:start + n_ang], 0, -1))
     ds = xr.Dataset(data, coords=coords)
     return annotate(ds, sweep, chunk_shape)

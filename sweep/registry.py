@@ -28,6 +28,7 @@ class Parameter:
     min_inclusive: bool = True
     max_inclusive: bool = True
     nonzero: bool = False
+    integer: bool = False
     choices: dict | None = None
 
     def domain_text(self) -> str:
@@ -35,7 +36,8 @@ class Parameter:
             return "one of " + ", ".join(repr(c) for c in self.choices)
         lo = "[" if self.min_inclusive else "("
         hi = "]" if self.max_inclusive else ")"
-        text = f"a finite number in {lo}{self.minimum:g}, {self.maximum:g}{hi}"
+        kind = "a whole number" if self.integer else "a finite number"
+        text = f"{kind} in {lo}{self.minimum:g}, {self.maximum:g}{hi}"
         return text + (", not 0" if self.nonzero else "")
 
     def check(self, value) -> str | None:
@@ -44,6 +46,8 @@ class Parameter:
             ok = any(value == c and type(value) is type(c) for c in self.choices)
             return None if ok else self.domain_text()
         if isinstance(value, bool) or not isinstance(value, (int, float)):
+            return self.domain_text()
+        if self.integer and not isinstance(value, int):
             return self.domain_text()
         v = float(value)
         if not math.isfinite(v):
@@ -78,12 +82,19 @@ class Mechanism:
     title: str
     parameters: tuple[Parameter, ...]
     outputs: tuple[Output, ...]
-    run: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+    #: kernel entry point: (params, method) -> (outputs, status, profiles[n_prof, n, n_angle])
+    run: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]
     flags: tuple[str, ...]  # status meanings this mechanism can produce, "ok" first
-    method: dict = field(default_factory=dict)  # method key -> (default, description)
+    method: dict = field(default_factory=dict)  # method key -> Parameter (domain, default)
     method_text: str = ""
     #: cross-parameter rules: called with {name: set of values (or None if absent)}
     check: Callable[[dict], None] | None = None
+    #: flags besides "ok" whose points still carry design values (charts show them)
+    usable_flags: tuple[str, ...] = ()
+    #: per-point profiles along an extra atlas dimension (e.g. crank_angle), if any
+    profiles: tuple[Output, ...] = ()
+    profile_dim: Parameter | None = None
+    profile_coordinate: Callable[[dict], np.ndarray] | None = None  # method -> coordinate
 
     def parameter(self, name: str) -> Parameter:
         for p in self.parameters:

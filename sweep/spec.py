@@ -87,6 +87,21 @@ class Sweep:
     spec: dict = field(default_factory=dict)  # the spec with defaults filled, JSON-able
 
     @property
+    def scalar_outputs(self) -> list[str]:
+        names = {o.name for o in self.mechanism.outputs}
+        return [n for n in self.outputs if n in names]
+
+    @property
+    def profile_outputs(self) -> list[str]:
+        names = {o.name for o in self.mechanism.profiles}
+        return [n for n in self.outputs if n in names]
+
+    def profile_coordinate(self) -> np.ndarray:
+        if not self.profile_outputs:
+            return np.empty(0)
+        return self.mechanism.profile_coordinate(self.method)
+
+    @property
     def shape(self) -> tuple[int, ...]:
         return tuple(len(a.values) for a in self.axes)
 
@@ -233,20 +248,6 @@ def validate(raw: dict) -> Sweep:
     if mech.check is not None:
         mech.check(given)  # only what the user set; the rules know the defaults
 
-    all_outputs = [o.name for o in mech.outputs]
-    if model.outputs is None:
-        outputs = all_outputs
-    else:
-        if not model.outputs:
-            raise UserError("outputs: empty list; omit the key for all outputs")
-        for name in model.outputs:
-            if name not in all_outputs:
-                raise UserError(f"outputs: unknown output {name!r} of {mech.name}; "
-                                f"allowed: {', '.join(all_outputs)}")
-        if len(set(model.outputs)) != len(model.outputs):
-            raise UserError("outputs: repeated names")
-        outputs = list(model.outputs)
-
     method: dict[str, float] = {}
     for name in model.method:
         if name not in mech.method:
@@ -259,9 +260,31 @@ def validate(raw: dict) -> Sweep:
         if problem is not None:
             raise UserError(f"method.{name}: value {v!r} is not allowed; allowed: {problem}")
         method[name] = float(v)
+    profile_names = [o.name for o in mech.profiles]
+    profiling = bool(mech.profiles) and method.get("profile_points", 0) > 0
+
+    all_outputs = [o.name for o in mech.outputs] + profile_names
+    if model.outputs is None:
+        outputs = [o.name for o in mech.outputs] + (profile_names if profiling else [])
+    else:
+        if not model.outputs:
+            raise UserError("outputs: empty list; omit the key for all outputs")
+        for name in model.outputs:
+            if name not in all_outputs:
+                raise UserError(f"outputs: unknown output {name!r} of {mech.name}; "
+                                f"allowed: {', '.join(all_outputs)}")
+        if len(set(model.outputs)) != len(model.outputs):
+            raise UserError("outputs: repeated names")
+        for name in model.outputs:
+            if name in profile_names and not profiling:
+                raise UserError(f"outputs: {name} is a profile; set method.profile_points "
+                                "to a number of crank angles > 0")
+        outputs = list(model.outputs)
 
     if model.chart is not None:
         names = set(model.grid) | set(outputs)
+        if mech.profile_dim is not None and profiling:
+            names.add(mech.profile_dim.name)
         for axis in ("x", "y", "color"):
             v = getattr(model.chart, axis)
             if v not in names:

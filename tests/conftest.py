@@ -18,7 +18,7 @@ def crank_rocker_point(**given):
     for k, p in enumerate(mech.parameters):
         v = given.get(p.name, p.default)
         params[k, 0] = math.nan if v is None else p.encode(v)
-    out, status = mech.run(params, np.array([given.get("geometry_tol", 1e-9)]))
+    out, status, _ = mech.run(params, np.array([given.get("geometry_tol", 1e-9)]))
     return dict(zip(cr.OUTPUTS, out[:, 0])), FLAG_MEANINGS[status[0]]
 
 

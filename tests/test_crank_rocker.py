@@ -302,5 +302,5 @@ def test_kernel_writes_status_for_every_point_of_a_block():
     params[cr.P_ROOT] = 0
     params[cr.P_L1], params[cr.P_W], params[cr.P_SIGMA] = 0.1, 30.0, 0.0
     params[cr.P_LAM0, 2], params[cr.P_LAM2, 2], params[cr.P_LAM3, 2] = 1.0, 2.0, 2.0
-    out, status = cr.crank_rocker_run(params, np.array([1e-9]))
+    out, status, _ = cr.crank_rocker_run(params, np.array([1e-9]))
     assert list(status) == [0, 2, 13]

@@ -1,0 +1,93 @@
+"""linkage_forces through the engine: spec boundary, profiles in the atlas, invariance."""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from sweep import atlas, engine, spec
+from sweep.cli import main
+from sweep.errors import UserError
+
+SPEC = '''
+mechanism = "linkage_forces"
+[grid]
+omega1 = [10.0, 30.0, -20.0]
+tilt = {start = 0.0, stop = 1.0, num = 3}
+m3 = [4.0, 8.0]
+[method]
+profile_points = 36
+quadrature_points = 64
+peak_samples = 181
+'''
+
+
+def write(tmp_path, name, chunk=None, workers=None, text=SPEC):
+    s = spec.parse(text)
+    ds = engine.build(s, chunk=chunk)
+    ds.attrs["history"] = "test"
+    atlas.write_atomic(ds, tmp_path / name, progress=False, workers=workers)
+    return xr.open_dataset(tmp_path / name)
+
+
+@pytest.mark.parametrize("text, key", [
+    ("[fixed]\nm2 = -1.0", "fixed.m2"),
+    ("[fixed]\nJ1 = -0.1", "fixed.J1"),
+    ("[fixed]\nl2 = 0.0", "fixed.l2"),
+    ("[fixed]\nl0 = -0.2", "fixed.l0"),
+    ("[fixed]\ng = nan", "fixed.g"),
+    ("[fixed]\nbase_omega = 2.0", "base_omega"),
+    ("[method]\nquadrature_points = 20.5", "method.quadrature_points"),
+    ("[method]\nspecial_window = 0.0", "method.special_window"),
+    ("[method]\nprofile_points = -3", "method.profile_points"),
+    ('outputs = ["F21_n"]', "profile_points"),
+    ("[fixed]\ntilt = 7.0", "fixed.tilt"),
+])
+def test_bad_kinetostatics_specs_are_rejected(text, key):
+    head, _, rest = text.partition("\n") if text.startswith("outputs") else ("", "", text)
+    full = (head + "\n" if head else "") + 'mechanism = "linkage_forces"\n[grid]\nomega1 = [30.0]\n' + rest
+    with pytest.raises(UserError) as err:
+        spec.parse(full)
+    assert key in str(err.value) and "\n" not in str(err.value)
+
+
+def test_profiles_become_an_atlas_dimension_with_cf_attributes(tmp_path):
+    ds = write(tmp_path, "a.nc")
+    assert ds["F21_n"].dims == ("omega1", "tilt", "m3", "crank_angle")
+    assert ds["force_peak_B"].dims == ("omega1", "tilt", "m3")
+    assert ds["crank_angle"].attrs["units"] == "rad" and ds.sizes["crank_angle"] == 36
+    for name in list(ds.data_vars) + list(ds.coords):
+        assert ds[name].attrs.get("units") and ds[name].attrs.get("long_name"), name
+    meanings = ds["status"].attrs["flag_meanings"].split()
+    code = ds["status"].attrs["flag_values"][meanings.index("special_position")]
+    assert set(ds["status"].values.ravel()) == {code}
+    # the peak is at least every profile sample outside the window
+    peak = ds["force_peak_B"].isel(omega1=1, tilt=1, m3=1).item()
+    f21 = np.hypot(ds["F21_n"], ds["F21_t"]).isel(omega1=1, tilt=1, m3=1).values
+    angles = ds["crank_angle"].values
+    outside = (angles > 0.01) & (angles < 2 * np.pi - 0.01)
+    assert peak >= f21[outside].max() * (1 - 1e-9)
+    # heavier rocker, larger reactions at D; the drive's cycle work scales with speed^2
+    d = ds["force_peak_D"].isel(omega1=1, tilt=0)
+    assert d.sel(m3=8.0) > d.sel(m3=4.0)
+    w = ds["cycle_work"].isel(tilt=0, m3=1)
+    assert w.sel(omega1=30.0) / w.sel(omega1=10.0) == pytest.approx(9.0, rel=1e-6)
+    assert (ds["cycle_work"] > 0).all()  # energy lost at impact, either rotation direction
+
+
+def test_profiles_are_chunk_and_thread_invariant(tmp_path):
+    a = write(tmp_path, "a.nc", chunk=1, workers=2)
+    b = write(tmp_path, "b.nc", chunk=10**6, workers=1)
+    for name in a.data_vars:
+        assert np.array_equal(a[name].values, b[name].values, equal_nan=True), name
+
+
+def test_profile_chart_cli(tmp_path, capsys):
+    write(tmp_path, "a.nc")
+    png = tmp_path / "p.png"
+    with pytest.raises(SystemExit) as e:
+        main(["profile", str(tmp_path / "a.nc"), "--vars", "F21_n,balancing_moment",
+              "--where", "omega1 == 30 and m3 == 8", "-o", str(png)])
+    assert e.value.code == 0 and png.read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(SystemExit) as e:
+        main(["profile", str(tmp_path / "a.nc"), "--vars", "force_peak_B", "-o", str(png)])
+    assert e.value.code == 2 and "not a profile" in capsys.readouterr().err
