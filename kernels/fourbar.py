@@ -174,3 +174,46 @@ def transmission_angle_half(sh, ch, l0, l1, l2, l3, tol):
     # tan(mu/2) = sin(mu)/(1 + cos(mu)) = sqrt(Q/P), since 2 l2 l3 + l2^2 + l3^2 - d^2 = P
     mu = 2.0 * atan_fast(math.sqrt(q / p))
     return min(mu, math.pi - mu)
+
+
+@njit(**KERNEL_OPTIONS)
+def vector_kinematics(phi1, l0, l1, l2, l3, sigma, snap=0.0):
+    """Unit vectors of the links and the transfer functions, without inverse trigonometry.
+
+    Returns (c1, s1, c2, s2, c3, s3, u21, u31, u21', u31') with (ci, si) = (cos, sin) of
+    phi_i; NaNs where the loop cannot close. The same closed forms as loop_closure and
+    transfer_functions, written with the unit vectors: sin(phi3 - phi2) is a cross product,
+    cos(phi1 - phi2) a dot product. Two trigonometric calls per angle instead of ~20, for
+    the kernels that evaluate thousands of crank angles per grid point.
+    """
+    nan = math.nan
+    sh = math.sin(0.5 * phi1)
+    ch = math.cos(0.5 * phi1)
+    d2, p, q = dyad_factors_half(sh, ch, l0, l1, l2, l3, snap)
+    if p < 0.0 or q < 0.0:
+        return nan, nan, nan, nan, nan, nan, nan, nan, nan, nan
+    s1 = 2.0 * sh * ch
+    c1 = (ch - sh) * (ch + sh)
+    root = math.sqrt(p * q)
+    d = math.sqrt(d2)
+    # e_DB rotated by sigma*psi: cos psi = (l3^2 + d^2 - l2^2)/(2 l3 d), sin psi = root/(2 l3 d)
+    bx, by = l1 * c1 - l0, l1 * s1
+    inv = 1.0 / (2.0 * l3 * d2)
+    cpsi = (l3 * l3 + d2 - l2 * l2) * inv
+    spsi = sigma * root * inv
+    c3 = bx * cpsi - by * spsi
+    s3 = by * cpsi + bx * spsi
+    norm3 = math.sqrt(c3 * c3 + s3 * s3)
+    c3 /= norm3
+    s3 /= norm3
+    cx = l0 + l3 * c3 - l1 * c1
+    cy = l3 * s3 - l1 * s1
+    norm2 = math.sqrt(cx * cx + cy * cy)
+    c2, s2 = cx / norm2, cy / norm2
+    s32 = s3 * c2 - c3 * s2  # sin(phi3 - phi2)
+    c32 = c3 * c2 + s3 * s2
+    u31 = l1 * (l1 - l0 * c1) / d2 - sigma * l0 * l1 * s1 * (d2 + l2 * l2 - l3 * l3) / (d2 * root)
+    u21 = l1 * (s1 * c3 - c1 * s3) / (l2 * s32)
+    du31 = (l1 * (c1 * c2 + s1 * s2) + l2 * u21 * u21 - l3 * u31 * u31 * c32) / (l3 * s32)
+    du21 = (l1 * (c1 * c3 + s1 * s3) + l2 * u21 * u21 * c32 - l3 * u31 * u31) / (l2 * s32)
+    return c1, s1, c2, s2, c3, s3, u21, u31, du21, du31

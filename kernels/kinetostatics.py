@@ -28,7 +28,7 @@ from kernels.fourbar import (
     CHANGE_POINT_C,
     change_point_identities,
     crank_turns_fully,
-    transfer_functions,
+    vector_kinematics,
 )
 
 PARAMETERS = (
@@ -66,6 +66,13 @@ def _cross(ax, ay, bx, by):
 
 @njit(**KERNEL_OPTIONS)
 def joint_forces(phi1, pr, sigma, res, snap=0.0):
+    """Joint reactions and balancing moment at crank angle phi1 (see _joint_forces)."""
+    tilt, g = pr[18], pr[19]
+    return _joint_forces(phi1, pr, sigma, res, snap, -g * math.sin(tilt), -g * math.cos(tilt))
+
+
+@njit(**KERNEL_OPTIONS)
+def _joint_forces(phi1, pr, sigma, res, snap, gx, gy):
     """Joint reactions and balancing moment at crank angle phi1 (linkages.md §5.3).
 
     pr holds one point's parameters in the order of PARAMETERS; res (length N_RESULT) gets the
@@ -73,6 +80,7 @@ def joint_forces(phi1, pr, sigma, res, snap=0.0):
     work and from the reactions, and the normal/tangential components relative to the coupler
     (F21), rocker (F34, F32) and crank (F14). Returns False where the loop cannot close.
     snap: see kernels.fourbar.dyad_factors (the point kernel passes geometry_tol).
+    (gx, gy): gravity in the base frame, -g (sin tilt, cos tilt), computed once per point.
     """
     l0, l1, l2, l3 = pr[0], pr[1], pr[2], pr[3]
     m1, m2, m3 = pr[4], pr[5], pr[6]
@@ -80,7 +88,6 @@ def joint_forces(phi1, pr, sigma, res, snap=0.0):
     q1, q2, q3 = pr[10], pr[11], pr[12]
     j1, j2, j3 = pr[13], pr[14], pr[15]
     w1, e1 = pr[16], pr[17]
-    tilt, g = pr[18], pr[19]
     f_t, f_n, arm, m_ext = pr[21], pr[22], pr[23], pr[24]
     rotating = pr[25] == BASE_ROTATING
     wb = pr[26] if rotating else 0.0
@@ -88,17 +95,13 @@ def joint_forces(phi1, pr, sigma, res, snap=0.0):
     oax = pr[28] if rotating else 0.0
     oay = pr[29] if rotating else 0.0
 
-    phi2, phi3, u21, u31, du21, du31 = transfer_functions(phi1, l0, l1, l2, l3, sigma, snap)
-    if math.isnan(phi3) or math.isnan(u31):
+    c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(phi1, l0, l1, l2, l3,
+                                                                       sigma, snap)
+    if math.isnan(c3) or math.isnan(u31):
         return False
     w2, w3 = u21 * w1, u31 * w1
     e2 = du21 * w1 * w1 + u21 * e1
     e3 = du31 * w1 * w1 + u31 * e1
-    c1, s1 = math.cos(phi1), math.sin(phi1)
-    c2, s2 = math.cos(phi2), math.sin(phi2)
-    c3, s3 = math.cos(phi3), math.sin(phi3)
-    gx, gy = -g * math.sin(tilt), -g * math.cos(tilt)  # gravity in the base frame
-
     # positions (origin A): centroid offsets rho_i = p_i e_i + q_i n_i
     r1x, r1y = p1 * c1 - q1 * s1, p1 * s1 + q1 * c1
     r2x, r2y = p2 * c2 - q2 * s2, p2 * s2 + q2 * c2
@@ -211,13 +214,14 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     if kind != 0 and kind != CHANGE_POINT_C and abs(l0 - l1) <= tol * (l0 + l1 + l2 + l3):
         return st.DEGENERATE
     start = math.pi if kind == CHANGE_POINT_C else 0.0  # cycle (phi1*, phi1* + 2 pi)
+    gx, gy = -pr[19] * math.sin(pr[18]), -pr[19] * math.cos(pr[18])  # gravity, base frame
 
     # cycle work and RMS of M_b: Gauss-Legendre on the open cycle, one-sided at the node
     half = math.pi
     work = 0.0
     square = 0.0
     for k in range(gl_x.shape[0]):
-        if not joint_forces(start + half * (gl_x[k] + 1.0), pr, sigma, res, tol):
+        if not _joint_forces(start + half * (gl_x[k] + 1.0), pr, sigma, res, tol, gx, gy):
             return st.NOT_ASSEMBLABLE
         work += half * gl_w[k] * res[R_MB]
         square += half * gl_w[k] * res[R_MB] * res[R_MB]
@@ -232,12 +236,12 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
         phi = lo + (hi - lo) * k / (n_peak - 1)
         if count > 1 and abs(phi - start - math.pi) < window:
             continue  # the second node at phi1* + pi (H10)
-        if not joint_forces(phi, pr, sigma, res, tol):
+        if not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
             return st.NOT_ASSEMBLABLE
-        pa = max(pa, math.hypot(res[R_F14X], res[R_F14Y]))
-        pb = max(pb, math.hypot(res[R_F21X], res[R_F21Y]))
-        pc = max(pc, math.hypot(res[R_F32X], res[R_F32Y]))
-        pd = max(pd, math.hypot(res[R_F34X], res[R_F34Y]))
+        pa = max(pa, math.sqrt(res[R_F14X] ** 2 + res[R_F14Y] ** 2))
+        pb = max(pb, math.sqrt(res[R_F21X] ** 2 + res[R_F21Y] ** 2))
+        pc = max(pc, math.sqrt(res[R_F32X] ** 2 + res[R_F32Y] ** 2))
+        pd = max(pd, math.sqrt(res[R_F34X] ** 2 + res[R_F34Y] ** 2))
         pm = max(pm, abs(res[R_MB]))
     out[0], out[1], out[2], out[3], out[4] = pa, pb, pc, pd, pm
 
@@ -251,7 +255,7 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
                     at_node = True
             if count > 1 and abs(phi - start - math.pi) < 1e-12:
                 at_node = True
-        if at_node or not joint_forces(phi, pr, sigma, res, tol):
+        if at_node or not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
             continue
         prof[0, j], prof[1, j] = res[R_F21N], res[R_F21T]
         prof[2, j], prof[3, j] = res[R_F34N], res[R_F34T]

@@ -199,3 +199,19 @@ def test_kernels_do_not_raise_on_division_by_zero():
     fb.transfer_functions(0.0, 1.0, 1.0, 2.0, 2.0, 1.0)
     from kernels.crank_rocker import branch_values
     assert not math.isfinite(branch_values(fb.CHANGE_POINT_A, 1.0, 1.0, -1.0, 1.0)[0])
+
+
+@pytest.mark.parametrize("geom", GEOMETRIES)
+@pytest.mark.parametrize("sigma", [1.0, -1.0])
+def test_vector_kinematics_equals_the_angle_route(geom, sigma):
+    for phi1 in np.linspace(-3.0, 3.1, 41):
+        c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = fb.vector_kinematics(phi1, *geom, sigma)
+        phi2, phi3, v21, v31, dv21, dv31 = fb.transfer_functions(phi1, *geom, sigma)
+        if math.isnan(phi3):
+            assert math.isnan(c3)
+            continue
+        assert abs(c2 - math.cos(phi2)) < 1e-14 and abs(s2 - math.sin(phi2)) < 1e-14
+        assert abs(c3 - math.cos(phi3)) < 1e-14 and abs(s3 - math.sin(phi3)) < 1e-14
+        for a, b in ((u21, v21), (u31, v31), (du21, dv21), (du31, dv31)):
+            assert a == pytest.approx(b, rel=1e-9, abs=1e-12)
+        assert residual(phi1, math.atan2(s2, c2), math.atan2(s3, c3), *geom) <= 1e-13 * sum(geom)

@@ -48,8 +48,11 @@ class Mech:
     def state(self, phi1):
         p = self.p
         l0, l1, l2, l3 = p["l0"], p["l1"], p["l2"], p["l3"]
-        phi2, phi3, u21, u31, du21, du31 = fb.transfer_functions(phi1, l0, l1, l2, l3,
-                                                                 p["sigma"], SNAP)
+        # the kernel's kinematic inputs (checked on their own in test_fourbar and by O16),
+        # so that O13 compares the two force algorithms on the same kinematics
+        c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = fb.vector_kinematics(
+            phi1, l0, l1, l2, l3, p["sigma"], SNAP)
+        phi2, phi3 = math.atan2(s2, c2), math.atan2(s3, c3)
         w1, e1 = p["omega1"], p["epsilon1"]
         ang = np.array([phi1, phi2, phi3])
         u = np.array([1.0, u21, u31])
