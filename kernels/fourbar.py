@@ -21,6 +21,10 @@ CHANGE_POINT_A = 1  # lambda0 + lambda3 = 1 + lambda2, node at (phi1, phi3) = (0
 CHANGE_POINT_B = 2  # lambda0 + lambda2 = 1 + lambda3, node at (0, pi)
 CHANGE_POINT_C = 4  # lambda0 + 1 = lambda2 + lambda3, node at (pi, pi)
 
+#: |DB|^2 below this times (l0 + l1)^2 counts as B on D: the square of a distance under
+#: ~1e-140 of the link scale is subnormal and has lost its digits
+B_ON_D = 1e-280
+
 
 @njit(**KERNEL_OPTIONS)
 def dyad_factors(phi1, l0, l1, l2, l3, snap=0.0):
@@ -57,24 +61,62 @@ def dyad_factors_half(sh, ch, l0, l1, l2, l3, snap=0.0):
 
 
 @njit(**KERNEL_OPTIONS)
+def closure_vectors(sh, ch, l0, l1, l2, l3, sigma, snap=0.0):
+    """The loop closure (linkages.md §2.1) as unit vectors: the one solver of this package.
+
+    From sh = sin(phi1/2), ch = cos(phi1/2): returns (c1, s1, c2, s2, c3, s3, d2, root) with
+    (ci, si) = (cos, sin) of phi_i, d2 = |DB|^2 and root = sqrt(P Q); NaNs where the loop
+    cannot close. phi3 = theta_DB + sigma psi is built by rotating the unit vector D->B by
+    sigma psi, with cos psi = (l3^2 + d^2 - l2^2)/(2 l3 d) and sin psi = sqrt(PQ)/(2 l3 d):
+    the factored P, Q keep the vanishing factor exact at a change point, and no arccos is
+    taken (hard cases H2-H4).
+    """
+    nan = math.nan
+    d2, p, q = dyad_factors_half(sh, ch, l0, l1, l2, l3, snap)
+    if p < 0.0 or q < 0.0:
+        return nan, nan, nan, nan, nan, nan, nan, nan
+    if d2 <= B_ON_D * (l0 + l1) * (l0 + l1):
+        # B on D (H9): the rocker angle is undefined, and |DB|^2 would underflow anyway
+        return nan, nan, nan, nan, nan, nan, nan, nan
+    s1 = 2.0 * sh * ch
+    c1 = (ch - sh) * (ch + sh)
+    root = math.sqrt(p * q)
+    bx, by = l1 * c1 - l0, l1 * s1
+    inv = 1.0 / (2.0 * l3 * d2)
+    cpsi = (l3 * l3 + d2 - l2 * l2) * inv
+    spsi = sigma * root * inv
+    c3 = bx * cpsi - by * spsi
+    s3 = by * cpsi + bx * spsi
+    norm3 = math.sqrt(c3 * c3 + s3 * s3)
+    c3 /= norm3
+    s3 /= norm3
+    cx = l0 + l3 * c3 - l1 * c1
+    cy = l3 * s3 - l1 * s1
+    norm2 = math.sqrt(cx * cx + cy * cy)
+    return c1, s1, cx / norm2, cy / norm2, c3, s3, d2, root
+
+
+@njit(**KERNEL_OPTIONS)
 def loop_closure(phi1, l0, l1, l2, l3, sigma, snap=0.0):
     """Coupler and rocker angles (phi2, phi3) [rad] at crank angle phi1 on branch sigma.
 
-    Returns NaN, NaN where the links cannot close (P < 0 or Q < 0). phi3 lies in (-2pi, 2pi);
-    compare angles modulo 2pi. snap: see dyad_factors.
+    Returns NaN, NaN where the links cannot close (P < 0 or Q < 0). Angles in (-pi, pi];
+    compare them modulo 2pi. snap: see dyad_factors.
     """
-    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3, snap)
-    if p < 0.0 or q < 0.0:
+    c1, s1, c2, s2, c3, s3, d2, root = closure_vectors(
+        math.sin(0.5 * phi1), math.cos(0.5 * phi1), l0, l1, l2, l3, sigma, snap)
+    if math.isnan(c3):
         return math.nan, math.nan
-    s1 = math.sin(phi1)
-    c1 = math.cos(phi1)
-    theta_db = math.atan2(l1 * s1, l1 * c1 - l0)
-    psi = math.atan2(math.sqrt(p * q), l3 * l3 + d2 - l2 * l2)
-    phi3 = theta_db + sigma * psi
-    cx = l0 + l3 * math.cos(phi3) - l1 * c1
-    cy = l3 * math.sin(phi3) - l1 * s1
-    phi2 = math.atan2(cy, cx)
-    return phi2, phi3
+    return math.atan2(s2, c2), math.atan2(s3, c3)
+
+
+@njit(**KERNEL_OPTIONS)
+def _stable_u31(c1, s1, d2, root, l0, l1, l2, l3, sigma):
+    """u31 = dtheta_DB/dphi1 + sigma dpsi/dphi1 (linkages.md §2.3); 0/0 = NaN at the node."""
+    if root == 0.0:
+        return math.nan  # the node itself (H1), or a dead position of the dyad
+    return (l1 * (l1 - l0 * c1) / d2
+            - sigma * l0 * l1 * s1 * (d2 + l2 * l2 - l3 * l3) / (d2 * root))
 
 
 @njit(**KERNEL_OPTIONS)
@@ -84,41 +126,44 @@ def transfer_ratio(phi1, l0, l1, l2, l3, sigma, snap=0.0):
     Exact to ~1e-15 away from a special position and to ~3e-8 at |dphi1| = 1e-8 from it;
     NaN exactly at the special position (0/0, hard case H1) and where the loop cannot close.
     """
-    d2, p, q = dyad_factors(phi1, l0, l1, l2, l3, snap)
+    sh, ch = math.sin(0.5 * phi1), math.cos(0.5 * phi1)
+    d2, p, q = dyad_factors_half(sh, ch, l0, l1, l2, l3, snap)
     if p < 0.0 or q < 0.0:
         return math.nan
-    root = math.sqrt(p * q)
-    s1 = math.sin(phi1)
-    first = l1 * (l1 - l0 * math.cos(phi1)) / d2
-    num = l0 * l1 * s1 * (d2 + l2 * l2 - l3 * l3)
-    if root == 0.0:
-        if num == 0.0:
-            return math.nan
-        # a rocker dead position of the dyad: u31 is infinite, no motion through it
-        return math.nan
-    return first - sigma * num / (d2 * root)
+    return _stable_u31((ch - sh) * (ch + sh), 2.0 * sh * ch, d2, math.sqrt(p * q),
+                       l0, l1, l2, l3, sigma)
+
+
+@njit(**KERNEL_OPTIONS)
+def vector_kinematics(phi1, l0, l1, l2, l3, sigma, snap=0.0):
+    """Unit vectors of the links and the transfer functions (linkages.md §2.2-2.3).
+
+    Returns (c1, s1, c2, s2, c3, s3, u21, u31, u21', u31') with (ci, si) = (cos, sin) of
+    phi_i and u'_k1 = d^2 phi_k/dphi1^2; NaNs where the loop cannot close. Angle
+    differences are cross and dot products of the unit vectors: two trigonometric calls per
+    crank angle, for kernels that evaluate thousands of angles per grid point. The
+    second-order functions divide by sin(phi3 - phi2) and are 0/0 at the special position.
+    """
+    c1, s1, c2, s2, c3, s3, d2, root = closure_vectors(
+        math.sin(0.5 * phi1), math.cos(0.5 * phi1), l0, l1, l2, l3, sigma, snap)
+    if math.isnan(c3):
+        n = math.nan
+        return n, n, n, n, n, n, n, n, n, n
+    s32 = s3 * c2 - c3 * s2  # sin(phi3 - phi2)
+    c32 = c3 * c2 + s3 * s2
+    u31 = _stable_u31(c1, s1, d2, root, l0, l1, l2, l3, sigma)
+    u21 = l1 * (s1 * c3 - c1 * s3) / (l2 * s32)
+    du31 = (l1 * (c1 * c2 + s1 * s2) + l2 * u21 * u21 - l3 * u31 * u31 * c32) / (l3 * s32)
+    du21 = (l1 * (c1 * c3 + s1 * s3) + l2 * u21 * u21 * c32 - l3 * u31 * u31) / (l2 * s32)
+    return c1, s1, c2, s2, c3, s3, u21, u31, du21, du31
 
 
 @njit(**KERNEL_OPTIONS)
 def transfer_functions(phi1, l0, l1, l2, l3, sigma, snap=0.0):
-    """First- and second-order transfer functions (linkages.md §2.2).
-
-    Returns (phi2, phi3, u21, u31, u21', u31') with u_k1 = dphi_k/dphi1 and
-    u'_k1 = d^2 phi_k / dphi1^2. u31 is taken from the stable form (§2.3); the second-order
-    functions divide by sin(phi3 - phi2) and are 0/0 at the special position.
-    """
-    phi2, phi3 = loop_closure(phi1, l0, l1, l2, l3, sigma, snap)
-    if math.isnan(phi3):
-        n = math.nan
-        return n, n, n, n, n, n
-    s32 = math.sin(phi3 - phi2)
-    u31 = transfer_ratio(phi1, l0, l1, l2, l3, sigma, snap)
-    u21 = l1 * math.sin(phi1 - phi3) / (l2 * s32)
-    du31 = (l1 * math.cos(phi1 - phi2) + l2 * u21 * u21
-            - l3 * u31 * u31 * math.cos(phi3 - phi2)) / (l3 * s32)
-    du21 = (l1 * math.cos(phi1 - phi3) + l2 * u21 * u21 * math.cos(phi2 - phi3)
-            - l3 * u31 * u31) / (l2 * s32)
-    return phi2, phi3, u21, u31, du21, du31
+    """(phi2, phi3, u21, u31, u21', u31') at crank angle phi1: vector_kinematics as angles."""
+    c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(phi1, l0, l1, l2, l3,
+                                                                       sigma, snap)
+    return math.atan2(s2, c2), math.atan2(s3, c3), u21, u31, du21, du31
 
 
 @njit(**KERNEL_OPTIONS)
@@ -174,46 +219,3 @@ def transmission_angle_half(sh, ch, l0, l1, l2, l3, tol):
     # tan(mu/2) = sin(mu)/(1 + cos(mu)) = sqrt(Q/P), since 2 l2 l3 + l2^2 + l3^2 - d^2 = P
     mu = 2.0 * atan_fast(math.sqrt(q / p))
     return min(mu, math.pi - mu)
-
-
-@njit(**KERNEL_OPTIONS)
-def vector_kinematics(phi1, l0, l1, l2, l3, sigma, snap=0.0):
-    """Unit vectors of the links and the transfer functions, without inverse trigonometry.
-
-    Returns (c1, s1, c2, s2, c3, s3, u21, u31, u21', u31') with (ci, si) = (cos, sin) of
-    phi_i; NaNs where the loop cannot close. The same closed forms as loop_closure and
-    transfer_functions, written with the unit vectors: sin(phi3 - phi2) is a cross product,
-    cos(phi1 - phi2) a dot product. Two trigonometric calls per angle instead of ~20, for
-    the kernels that evaluate thousands of crank angles per grid point.
-    """
-    nan = math.nan
-    sh = math.sin(0.5 * phi1)
-    ch = math.cos(0.5 * phi1)
-    d2, p, q = dyad_factors_half(sh, ch, l0, l1, l2, l3, snap)
-    if p < 0.0 or q < 0.0:
-        return nan, nan, nan, nan, nan, nan, nan, nan, nan, nan
-    s1 = 2.0 * sh * ch
-    c1 = (ch - sh) * (ch + sh)
-    root = math.sqrt(p * q)
-    d = math.sqrt(d2)
-    # e_DB rotated by sigma*psi: cos psi = (l3^2 + d^2 - l2^2)/(2 l3 d), sin psi = root/(2 l3 d)
-    bx, by = l1 * c1 - l0, l1 * s1
-    inv = 1.0 / (2.0 * l3 * d2)
-    cpsi = (l3 * l3 + d2 - l2 * l2) * inv
-    spsi = sigma * root * inv
-    c3 = bx * cpsi - by * spsi
-    s3 = by * cpsi + bx * spsi
-    norm3 = math.sqrt(c3 * c3 + s3 * s3)
-    c3 /= norm3
-    s3 /= norm3
-    cx = l0 + l3 * c3 - l1 * c1
-    cy = l3 * s3 - l1 * s1
-    norm2 = math.sqrt(cx * cx + cy * cy)
-    c2, s2 = cx / norm2, cy / norm2
-    s32 = s3 * c2 - c3 * s2  # sin(phi3 - phi2)
-    c32 = c3 * c2 + s3 * s2
-    u31 = l1 * (l1 - l0 * c1) / d2 - sigma * l0 * l1 * s1 * (d2 + l2 * l2 - l3 * l3) / (d2 * root)
-    u21 = l1 * (s1 * c3 - c1 * s3) / (l2 * s32)
-    du31 = (l1 * (c1 * c2 + s1 * s2) + l2 * u21 * u21 - l3 * u31 * u31 * c32) / (l3 * s32)
-    du21 = (l1 * (c1 * c3 + s1 * s3) + l2 * u21 * u21 * c32 - l3 * u31 * u31) / (l2 * s32)
-    return c1, s1, c2, s2, c3, s3, u21, u31, du21, du31

@@ -54,7 +54,7 @@ def cli():
 @click.option("-q", "--quiet", is_flag=True, help="no progress bar or summary")
 def run(spec_file, output, force, chunk, workers, quiet):
     """Run a sweep; with no SPEC, the built-in default (the crank-rocker design atlas)."""
-    from sweep import atlas, engine, spec
+    from sweep import atlas, spec
 
     if spec_file is None:
         sweep_spec = spec.parse(_example_text(DEFAULT_EXAMPLE), source="default spec")
@@ -70,9 +70,8 @@ def run(spec_file, output, force, chunk, workers, quiet):
         raise UserError(f"output: {chart_path} exists; use --force to overwrite it")
 
     started = time.perf_counter()
-    ds = engine.build(sweep_spec, chunk=chunk)
-    ds.attrs["history"] = atlas.history_line()
-    atlas.write_atomic(ds, target, progress=not quiet, workers=workers or sweep_spec.run.workers)
+    atlas.write_atomic(sweep_spec, target, chunk=chunk, progress=not quiet,
+                       workers=workers or sweep_spec.run.workers)
     elapsed = time.perf_counter() - started
     written = _open_atlas(str(target))
     if chart_path is not None:

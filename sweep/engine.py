@@ -71,34 +71,70 @@ def run_block(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
     return result
 
 
-def build(sweep: Sweep, chunk: int | None = None) -> xr.Dataset:
-    """The atlas as a lazy (dask-backed) Dataset; nothing is computed here."""
-    shape = sweep.shape
-    angles = sweep.profile_coordinate()
-    n_ang = angles.shape[0]
-    n_out = len(sweep.scalar_outputs)
-    n_prof = len(sweep.profile_outputs)
-    # a block's memory grows with the profile length: keep it near the requested size
-    target = max(1, (chunk or sweep.run.chunk) * (n_out + 1) // (n_out + 1 + n_prof * n_ang))
-    chunk_shape = choose_chunks(shape, target)
-    chunks = da.core.normalize_chunks(chunk_shape, shape)
+class Plan:
+    """How a sweep is cut into blocks and where each kernel row goes in the atlas."""
+
+    def __init__(self, sweep: Sweep, chunk: int | None = None):
+        self.sweep = sweep
+        self.shape = sweep.shape
+        self.angles = sweep.profile_coordinate()
+        self.n_out = len(sweep.scalar_outputs)
+        self.n_prof = len(sweep.profile_outputs)
+        n_ang = self.angles.shape[0]
+        # a block's memory grows with the profile length: keep it near the requested size
+        per_point = self.n_out + 1 + self.n_prof * n_ang
+        target = max(1, (chunk or sweep.run.chunk) * (self.n_out + 1) // per_point)
+        self.chunk_shape = choose_chunks(self.shape, target)
+        self.chunks = da.core.normalize_chunks(self.chunk_shape, self.shape)
+        self.rows = per_point
+
+    def locations(self):
+        """Block index and [(start, stop) per grid dim] of every block, in C order."""
+        starts = [np.cumsum((0,) + c[:-1]) for c in self.chunks]
+        for index in np.ndindex(*[len(c) for c in self.chunks]):
+            yield index, [(int(starts[d][i]), int(starts[d][i] + self.chunks[d][i]))
+                          for d, i in enumerate(index)]
+
+    @property
+    def n_blocks(self) -> int:
+        return math.prod(len(c) for c in self.chunks)
+
+    def split(self, result: np.ndarray) -> dict[str, np.ndarray]:
+        """A stacked block result -> {variable: array over grid dims (+ profile dim last)}."""
+        out = {name: result[k] for k, name in enumerate(self.sweep.scalar_outputs)}
+        out["status"] = result[self.n_out].astype(np.int8)
+        n_ang = self.angles.shape[0]
+        for k, name in enumerate(self.sweep.profile_outputs):
+            start = self.n_out + 1 + k * n_ang
+            out[name] = np.moveaxis(result[start:start + n_ang], 0, -1)
+        return out
+
+
+def kernel_array(plan: Plan) -> da.Array:
+    """All kernel rows of the sweep as one lazy dask array (rows, *grid)."""
+    sweep = plan.sweep
 
     def block(block_info=None):
-        location = block_info[None]["array-location"][1:]
-        return run_block(sweep, location)
+        return run_block(sweep, block_info[None]["array-location"][1:])
 
-    rows = n_out + 1 + n_prof * n_ang
-    stacked = da.map_blocks(block, chunks=((rows,),) + chunks, dtype=np.float64,
-                            meta=np.empty((0,) * (len(shape) + 1)), name="kernel")
+    return da.map_blocks(block, chunks=((plan.rows,),) + plan.chunks, dtype=np.float64,
+                         meta=np.empty((0,) * (len(plan.shape) + 1)), name="kernel")
+
+
+def build(sweep: Sweep, chunk: int | None = None) -> xr.Dataset:
+    """The atlas as a lazy (dask-backed) Dataset; nothing is computed here."""
+    plan = Plan(sweep, chunk)
+    stacked = kernel_array(plan)
+    n_out, n_ang = plan.n_out, plan.angles.shape[0]
     dims = [axis.name for axis in sweep.axes]
     coords = {axis.name: (axis.name, axis.values) for axis in sweep.axes}
     data = {name: (dims, stacked[k]) for k, name in enumerate(sweep.scalar_outputs)}
     data["status"] = (dims, stacked[n_out].astype(np.int8))
-    if n_prof:
+    if plan.n_prof:
         pdim = sweep.mechanism.profile_dim.name
-        coords[pdim] = (pdim, angles)
+        coords[pdim] = (pdim, plan.angles)
         for k, name in enumerate(sweep.profile_outputs):
             start = n_out + 1 + k * n_ang
             data[name] = (dims + [pdim], da.moveaxis(stacked[start:start + n_ang], 0, -1))
     ds = xr.Dataset(data, coords=coords)
-    return annotate(ds, sweep, chunk_shape)
+    return annotate(ds, sweep, plan.chunk_shape)

@@ -24,10 +24,8 @@ omega1 = [30.0, -20.0]
 
 def write(tmp_path, name, chunk=None, workers=None, text=SPEC):
     s = spec.parse(text)
-    ds = engine.build(s, chunk=chunk)
-    ds.attrs["history"] = "test"
     path = tmp_path / name
-    atlas.write_atomic(ds, path, progress=False, workers=workers)
+    atlas.write_atomic(s, path, chunk=chunk, progress=False, workers=workers, history="test")
     return xr.open_dataset(path)
 
 
@@ -82,17 +80,28 @@ def test_chunk_choice_is_balanced_and_bounded():
     assert np.prod(c) <= 4096 and c[2] == 3
 
 
-def test_failed_write_leaves_nothing(tmp_path, monkeypatch):
+def test_failed_run_leaves_nothing(tmp_path, monkeypatch):
+    """A block that fails partway (after others were written) leaves no atlas, no temp file."""
     s = spec.parse(SPEC)
-    ds = engine.build(s)
+    calls = []
+    real = engine.run_block
 
-    def boom(*args, **kwargs):
-        raise RuntimeError("disk full")
+    def flaky(sweep, location):
+        calls.append(location)
+        if len(calls) == 5:
+            raise RuntimeError("disk full")
+        return real(sweep, location)
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", boom)
+    monkeypatch.setattr(engine, "run_block", flaky)
     with pytest.raises(RuntimeError):
-        atlas.write_atomic(ds, tmp_path / "a.nc", progress=False)
-    assert list(tmp_path.iterdir()) == []
+        atlas.write_atomic(s, tmp_path / "a.nc", chunk=50, progress=False, workers=2)
+    assert len(calls) >= 5 and list(tmp_path.iterdir()) == []
+
+
+def test_in_memory_dataset_equals_the_written_atlas(tmp_path, reference):
+    lazy = engine.build(spec.parse(SPEC), chunk=300).compute()
+    for name in reference.data_vars:
+        assert np.array_equal(lazy[name].values, reference[name].values, equal_nan=True)
 
 
 def test_query_language(reference):

@@ -50,7 +50,7 @@ def test_O6_loop_residual_and_O7_positions_match_newton(geom, sigma):
             return [[-l2 * math.sin(x[0]), l3 * math.sin(x[1])],
                     [l2 * math.cos(x[0]), -l3 * math.cos(x[1])]]
 
-        ref = fsolve(eqs, [phi2 + 0.05, phi3 - 0.05], fprime=jac, xtol=1e-14)
+        ref = fsolve(eqs, [phi2 + 0.05, phi3 - 0.05], fprime=jac, xtol=1e-12)
         assert abs(wrap(ref[0] - phi2)) < 1e-10 and abs(wrap(ref[1] - phi3)) < 1e-10  # O7
 
 
@@ -149,6 +149,11 @@ def test_H3_H4_node_of_the_double_crank_is_exact_at_phi1_zero():
         assert residual(0.0, phi2, phi3, 0.7, 1.0, 1.6, 1.3) < 1e-14
 
 
+def test_H9_rocker_angle_is_undefined_when_b_is_on_d():
+    assert math.isnan(fb.loop_closure(0.0, 1.0, 1.0, 2.0, 2.0, 1.0)[1])
+    assert not math.isnan(fb.loop_closure(1e-3, 1.0, 1.0, 2.0, 2.0, 1.0)[1])
+
+
 def test_H7_table1_lambda2_075_closes_only_for_small_crank_angles():
     lam0, lam3 = synthesize_largest_rod(0.75, 0.3)
     closes = lambda phi: not math.isnan(fb.loop_closure(phi, lam0, 1.0, 0.75, lam3, -1.0)[1])
@@ -183,7 +188,9 @@ lengths = st.floats(0.2, 5.0)
 def test_property_loop_residual_or_honest_nan(l0, l1, l2, l3, phi1, sigma):
     d2, p, q = fb.dyad_factors(phi1, l0, l1, l2, l3)
     phi2, phi3 = fb.loop_closure(phi1, l0, l1, l2, l3, sigma)
-    if p < 0 or q < 0:
+    if d2 <= fb.B_ON_D * (l0 + l1) ** 2:  # B on D: undefined (H9), not an arbitrary number
+        assert math.isnan(phi3)
+    elif p < 0 or q < 0:
         assert math.isnan(phi2) and math.isnan(phi3)
         # and it truly cannot close: d outside [|l2 - l3|, l2 + l3]
         d = math.sqrt(d2)
@@ -215,3 +222,29 @@ def test_vector_kinematics_equals_the_angle_route(geom, sigma):
         for a, b in ((u21, v21), (u31, v31), (du21, dv21), (du31, dv31)):
             assert a == pytest.approx(b, rel=1e-9, abs=1e-12)
         assert residual(phi1, math.atan2(s2, c2), math.atan2(s3, c3), *geom) <= 1e-13 * sum(geom)
+
+
+def _track(order, turns=4, h=4.1e-3, geom=(0.7, 1.0, 1.6, 1.3)):
+    """Continuation of phi3(phi1) through the node of seed 003's stage 1: at each step take
+    the root (of both branches) nearest a predictor of the given order. Returns the fraction
+    of steps on the branch of the explicit alternation rule sigma = s0 (-1)^floor(phi1/2pi)."""
+    phi = h / 2
+    sigma = -1.0
+    phi3 = fb.loop_closure(phi, *geom, sigma)[1]
+    agree = total = 0
+    while phi < turns * 2 * math.pi:
+        u = fb.transfer_ratio(phi, *geom, sigma)
+        predicted = phi3 + (u * h if order >= 1 else 0.0)
+        phi += h
+        roots = {s: fb.loop_closure(phi, *geom, s)[1] for s in (1.0, -1.0)}
+        sigma = min(roots, key=lambda s: abs(wrap(roots[s] - predicted)))
+        phi3 = roots[sigma]
+        rule = -1.0 * (-1.0) ** math.floor(phi / (2 * math.pi))
+        agree += sigma == rule
+        total += 1
+    return agree / total
+
+
+def test_H5_zeroth_order_tracking_takes_the_wrong_branch_at_the_node():
+    assert _track(order=1) == 1.0  # a first-order predictor follows the smooth curve
+    assert _track(order=0) < 0.6  # "nearest previous angle" bounces at the node

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from sweep import atlas, engine, spec
+from sweep import atlas, spec
 from sweep.cli import main
 from sweep.errors import UserError
 
@@ -23,9 +23,8 @@ peak_samples = 181
 
 def write(tmp_path, name, chunk=None, workers=None, text=SPEC):
     s = spec.parse(text)
-    ds = engine.build(s, chunk=chunk)
-    ds.attrs["history"] = "test"
-    atlas.write_atomic(ds, tmp_path / name, progress=False, workers=workers)
+    atlas.write_atomic(s, tmp_path / name, chunk=chunk, progress=False, workers=workers,
+                       history="test")
     return xr.open_dataset(tmp_path / name)
 
 
