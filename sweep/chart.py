@@ -98,7 +98,8 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
 
 def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path) -> tuple:
     """Profiles of ``names`` over the profile dimension at the first grid point matching
-    ``where``; a symmetric-log y axis shows a 1/dphi1 spike and the rest of the cycle."""
+    ``where``; where a profile spikes (1/dphi1 reactions) a symmetric-log y axis shows the
+    spike and the rest of the cycle."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -129,10 +130,15 @@ def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path
         y = point[name].values
         ax.plot(x, y, lw=1.0, label=f"{name}: {point[name].attrs.get('long_name', '')}")
         scale.append(np.nanmedian(np.abs(y)))
-    ax.set_yscale("symlog", linthresh=max(1e-12, float(np.nanmax(scale))))
-    ax.set_xlabel(_label(ds, pdim))
     units = {point[n].attrs.get("units", "") for n in names}
-    ax.set_ylabel(f"[{', '.join(sorted(units))}] (symmetric log)")
+    top = max(float(np.nanmax(np.abs(point[n].values))) for n in names)
+    typical = max(1e-300, float(np.nanmax(scale)))
+    if top > 100 * typical:  # a spike (1/dphi1 reactions): a log scale shows it and the rest
+        ax.set_yscale("symlog", linthresh=typical)
+        ax.set_ylabel(f"[{', '.join(sorted(units))}] (symmetric log)")
+    else:
+        ax.set_ylabel(f"[{', '.join(sorted(units))}]")
+    ax.set_xlabel(_label(ds, pdim))
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     where_text = ", ".join(f"{d} = {point[d].values:.4g}" if point[d].dtype.kind == "f"

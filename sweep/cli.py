@@ -15,7 +15,7 @@ import click
 
 from sweep.errors import UserError
 
-EXAMPLES = {"crank_rocker": "crank_rocker.toml", "linkage_forces": "linkage_forces.toml"}
+EXAMPLES = {name: f"{name}.toml" for name in ("crank_rocker", "linkage_forces", "six_link")}
 DEFAULT_EXAMPLE = "crank_rocker"
 
 

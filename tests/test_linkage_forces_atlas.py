@@ -90,3 +90,23 @@ def test_profile_chart_cli(tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
         main(["profile", str(tmp_path / "a.nc"), "--vars", "force_peak_B", "-o", str(png)])
     assert e.value.code == 2 and "not a profile" in capsys.readouterr().err
+
+
+def test_six_link_atlas_with_rocker_profile_over_4pi(tmp_path):
+    text = '''
+mechanism = "six_link"
+[grid]
+beta = {start = -1.0, stop = 1.0, num = 5}
+mu5 = [2.5, 4.0]
+[method]
+profile_points = 64
+samples = 720
+'''
+    ds = write(tmp_path, "s.nc", text=text)
+    assert ds["rocker_angle"].dims == ("beta", "mu5", "crank_angle")
+    assert ds["crank_angle"].values.max() < 4 * np.pi
+    assert (ds["status"] == 0).all()
+    zero = ds.sel(beta=0.0)
+    np.testing.assert_allclose(zero["transfer_impact_1"], zero["transfer_impact_2"], atol=1e-8)
+    with pytest.raises(UserError, match="fixed.direction"):
+        spec.parse('mechanism = "six_link"\n[grid]\nbeta = [0.0]\n[fixed]\ndirection = 2')
