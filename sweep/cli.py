@@ -15,7 +15,8 @@ import click
 
 from sweep.errors import UserError
 
-EXAMPLES = {name: f"{name}.toml" for name in ("crank_rocker", "linkage_forces", "six_link")}
+EXAMPLES = {name: f"{name}.toml" for name in ("crank_rocker", "linkage_forces", "six_link",
+                                                "spring_balancer")}
 DEFAULT_EXAMPLE = "crank_rocker"
 
 

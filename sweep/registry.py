@@ -30,6 +30,7 @@ class Parameter:
     nonzero: bool = False
     integer: bool = False
     choices: dict | None = None
+    aliases: dict | None = None  # words standing for numeric codes, e.g. {"auto": 0}
 
     def domain_text(self) -> str:
         if self.choices is not None:
@@ -38,6 +39,8 @@ class Parameter:
         hi = "]" if self.max_inclusive else ")"
         kind = "a whole number" if self.integer else "a finite number"
         text = f"{kind} in {lo}{self.minimum:g}, {self.maximum:g}{hi}"
+        if self.aliases:
+            text = " or ".join(repr(a) for a in self.aliases) + " or " + text
         return text + (", not 0" if self.nonzero else "")
 
     def check(self, value) -> str | None:
@@ -45,6 +48,8 @@ class Parameter:
         if self.choices is not None:
             ok = any(value == c and type(value) is type(c) for c in self.choices)
             return None if ok else self.domain_text()
+        if self.aliases and isinstance(value, str) and value in self.aliases:
+            return None
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             return self.domain_text()
         if self.integer and not isinstance(value, int):
@@ -61,6 +66,8 @@ class Parameter:
         return None
 
     def encode(self, value) -> float:
+        if self.aliases and isinstance(value, str) and value in self.aliases:
+            return float(self.aliases[value])
         if self.choices is not None:
             for label, code in self.choices.items():
                 if value == label and type(value) is type(label):

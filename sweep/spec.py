@@ -249,6 +249,7 @@ def validate(raw: dict) -> Sweep:
         mech.check(given)  # only what the user set; the rules know the defaults
 
     method: dict[str, float] = {}
+    method_echo: dict[str, Any] = {}
     for name in model.method:
         if name not in mech.method:
             allowed = ", ".join(mech.method) or "none"
@@ -259,7 +260,8 @@ def validate(raw: dict) -> Sweep:
         problem = p.check(v)
         if problem is not None:
             raise UserError(f"method.{name}: value {v!r} is not allowed; allowed: {problem}")
-        method[name] = float(v)
+        method[name] = p.encode(v)
+        method_echo[name] = v
     profile_names = [o.name for o in mech.profiles]
     profiling = bool(mech.profiles) and method.get("profile_points", 0) > 0
 
@@ -297,7 +299,7 @@ def validate(raw: dict) -> Sweep:
         "outputs": outputs,
         "grid": grid_echo,
         "fixed": fixed_echo,
-        "method": method,
+        "method": method_echo,
         "run": model.run.model_dump(),
     }
     if model.chart is not None:

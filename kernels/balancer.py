@@ -1,0 +1,439 @@
+"""Leaf-spring balancer on the driven mass of a four-bar (seed 002; dynamics.md §2).
+
+Model (B4)/(B9), in the crank angle theta = omega t (' = d/dtheta):
+    device:    f^2 g'' + 2 eta f g' + (1 + 1/r^2) g = gamma_s + gamma(theta)/r^2
+    no device: f^2 g'' + 2 eta f g' +      1/r^2  g =           gamma(theta)/r^2
+gamma(theta) is the rocker's displacement from its extreme position, from the exact loop
+closure. The steady state is closed form per harmonic of gamma (B6). The unbalanced-moment
+"invariants" gamma - g use their own transfer functions G_i, G_zr (no cancellation, H9).
+
+Model no more than the scene needs: the Fourier coefficients depend only on the geometry and
+are computed once per geometry (``fourier_coefficients``, numpy rFFT outside numba); the
+response for each (f, r, eta) is a short sum over harmonics (``response``).
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from kernels import KERNEL_OPTIONS
+from kernels import status as st
+from kernels.fourbar import closure_vectors, crank_turns_fully, vector_kinematics
+
+PARAMETERS = ("lambda0", "lambda2", "lambda3", "sigma", "f", "r", "eta", "spring_neutral")
+OUTPUTS = (
+    "swing", "moment_invariant_peak_free", "moment_invariant_peak_balanced",
+    "balancing_coefficient", "dynamic_coefficient_free", "dynamic_coefficient_balanced",
+    "acceleration_invariant_rigid", "harmonics_used", "truncation_error", "resonance_margin",
+)
+METHOD = ("harmonics", "tol", "resonance_tol")
+
+NEUTRAL_HALF_SWING, NEUTRAL_MEAN = 0, 1
+N_FFT_START, N_FFT_MAX = 4096, 65536
+TWO_PI = 2.0 * math.pi
+
+
+# ---------------------------------------------------------------- rocker motion (geometry)
+
+@njit(**KERNEL_OPTIONS)
+def rocker_angle(theta, l0, l1, l2, l3, sigma):
+    """Absolute rocker angle beta(theta) [rad] from the loop closure (NaN if it cannot close)."""
+    c1, s1, c2, s2, c3, s3, d2, root = closure_vectors(
+        math.sin(0.5 * theta), math.cos(0.5 * theta), l0, l1, l2, l3, sigma)
+    return math.atan2(s3, c3)
+
+
+@njit(**KERNEL_OPTIONS)
+def _extreme(theta, l0, l1, l2, l3, sigma):
+    """Newton on u31(theta) = 0 from theta: a rocker dead position (the swing's ends)."""
+    for _ in range(30):
+        out = vector_kinematics(theta, l0, l1, l2, l3, sigma)
+        u, du = out[7], out[9]
+        step = u / du
+        theta -= step
+        if abs(step) < 1e-15:
+            break
+    return theta
+
+
+@njit(**KERNEL_OPTIONS)
+def rocker_samples(l0, l1, l2, l3, sigma, n):
+    """gamma(theta_j) = beta - min beta at theta_j = 2 pi j / n, and the swing gamma0.
+
+    The extremes are polished by Newton on u31 = 0, so gamma0 is exact (dynamics.md B-O1).
+    Angles are unwrapped about beta(0): a rocker swings less than pi.
+    """
+    beta0 = rocker_angle(0.0, l0, l1, l2, l3, sigma)
+    out = np.empty(n)
+    lo_j, hi_j = 0, 0
+    for j in range(n):
+        b = rocker_angle(TWO_PI * j / n, l0, l1, l2, l3, sigma)
+        out[j] = (b - beta0 + math.pi) % TWO_PI - math.pi
+        if out[j] < out[lo_j]:
+            lo_j = j
+        if out[j] > out[hi_j]:
+            hi_j = j
+    t_lo = _extreme(TWO_PI * lo_j / n, l0, l1, l2, l3, sigma)
+    t_hi = _extreme(TWO_PI * hi_j / n, l0, l1, l2, l3, sigma)
+    lo = (rocker_angle(t_lo, l0, l1, l2, l3, sigma) - beta0 + math.pi) % TWO_PI - math.pi
+    hi = (rocker_angle(t_hi, l0, l1, l2, l3, sigma) - beta0 + math.pi) % TWO_PI - math.pi
+    lo = min(lo, out[lo_j])
+    hi = max(hi, out[hi_j])
+    for j in range(n):
+        out[j] -= lo
+    return out, hi - lo
+
+
+def fourier_coefficients(l0, l1, l2, l3, sigma, tol=1e-12):
+    """(a, b, gamma0) of gamma(theta) = a0 + sum a_n cos n theta + b_n sin n theta.
+
+    a[0] = a0; n runs to N/4 so that aliasing stays below the returned tail. N doubles from
+    4096 to 65536 until the top quarter of the spectrum is below tol*|c_1|; a non-smooth or
+    near-toggle motion may not get there, which the response's truncation estimate reports.
+    """
+    n = N_FFT_START
+    while True:
+        gamma, gamma0 = rocker_samples(l0, l1, l2, l3, sigma, n)
+        spec = np.fft.rfft(gamma) / n
+        mag = np.abs(spec)
+        if n >= N_FFT_MAX or mag[n // 4:].max() <= tol * max(mag[1], 1e-300):
+            break
+        n *= 2
+    keep = n // 4
+    a = 2.0 * spec.real[:keep + 1]
+    b = -2.0 * spec.imag[:keep + 1]
+    a[0] = spec.real[0]
+    b[0] = 0.0
+    # round-off floor of the samples: weighted by n^2 it would pass for 1000 harmonics of
+    # signal. Only a clearly numerical floor is cut; a non-smooth motion keeps its tail.
+    floor = 20.0 * np.median(mag[n // 4:])  # in units of |c_n|: mag is |c_n|/2
+    if floor < 1e-12 * mag[1]:
+        below = np.nonzero(np.hypot(a, b)[1:] < floor)[0]
+        if below.size:  # the geometric decay meets the floor: the rest is round-off
+            a[below[0] + 1:] = 0.0
+            b[below[0] + 1:] = 0.0
+    return a, b, gamma0
+
+
+# ---------------------------------------------------------------- steady-state response
+
+@njit(**KERNEL_OPTIONS)
+def _series(theta, cr, ci, c0, m, order):
+    """sum_n (cr_n cos n theta + ci_n sin n theta) differentiated `order` times, plus c0."""
+    total = c0 if order == 0 else 0.0
+    c, s = math.cos(theta), math.sin(theta)
+    cn, sn = c, s
+    for k in range(1, m + 1):
+        if order == 0:
+            total += cr[k] * cn + ci[k] * sn
+        elif order == 1:
+            total += k * (ci[k] * cn - cr[k] * sn)
+        elif order == 2:
+            total -= k * k * (cr[k] * cn + ci[k] * sn)
+        else:
+            total += k * k * k * (cr[k] * sn - ci[k] * cn)
+        cn, sn = cn * c - sn * s, sn * c + cn * s  # rotate: cos/sin of (k+1) theta
+    return total
+
+
+@njit(**KERNEL_OPTIONS)
+def _refine_peak(vals, cr, ci, c0, m, order):
+    """max over theta of |d^order/dtheta^order series| from its values on a uniform grid:
+    Newton on the derivative at every local maximum within 1e-3 of the largest sample."""
+    n = vals.shape[0]
+    top = 0.0
+    for j in range(n):
+        top = max(top, abs(vals[j]))
+    best = top
+    for j in range(n):
+        v = abs(vals[j])
+        if v < (1.0 - 1e-3) * top or v < abs(vals[j - 1]) or v < abs(vals[(j + 1) % n]):
+            continue
+        theta = TWO_PI * j / n
+        for _ in range(20):  # Newton on d/dtheta of the series = 0
+            d1 = _series(theta, cr, ci, c0, m, order + 1)
+            d2 = _series_d2(theta, cr, ci, m, order)
+            if d2 == 0.0:
+                break
+            step = d1 / d2
+            if abs(step) > TWO_PI / n:
+                break  # left the sampled lobe: keep the sample
+            theta -= step
+            if abs(step) < 1e-14:
+                break
+        best = max(best, abs(_series(theta, cr, ci, c0, m, order)))
+    return best
+
+
+@njit(**KERNEL_OPTIONS)
+def series_peak(cr, ci, c0, m, order):
+    """max over theta of |d^order/dtheta^order series| (8 m samples, then Newton)."""
+    n = max(32, 8 * m)
+    vals = np.empty(n)
+    for j in range(n):
+        vals[j] = _series(TWO_PI * j / n, cr, ci, c0, m, order)
+    return _refine_peak(vals, cr, ci, c0, m, order)
+
+
+@njit(**KERNEL_OPTIONS)
+def _series_d2(theta, cr, ci, m, order):
+    """Second derivative of the order-th derivative: order + 2 (orders 0..2 needed)."""
+    if order + 2 <= 3:
+        return _series(theta, cr, ci, 0.0, m, order + 2)
+    total = 0.0  # fourth derivative
+    c, s = math.cos(theta), math.sin(theta)
+    cn, sn = c, s
+    for k in range(1, m + 1):
+        total += k ** 4 * (cr[k] * cn + ci[k] * sn)
+        cn, sn = cn * c - sn * s, sn * c + cn * s
+    return total
+
+
+@njit(**KERNEL_OPTIONS)
+def _gain(num_re, num_im, den_re, den_im):
+    d = den_re * den_re + den_im * den_im
+    return (num_re * den_re + num_im * den_im) / d, (num_im * den_re - num_re * den_im) / d
+
+
+@njit(**KERNEL_OPTIONS)
+def _apply(gr, gi, a, b):
+    """The complex gain G = gr + i gi on a harmonic a cos + b sin (dynamics.md §2.5)."""
+    return gr * a + gi * b, gr * b - gi * a
+
+
+@njit(**KERNEL_OPTIONS)
+def choose_harmonics(a, b, f, r, eta, tol, forced):
+    """Harmonic count and the relative truncation estimate of the acceleration metrics.
+
+    Tail weight of harmonic n: n^2 |c_n| times the largest mass-response gain of the two
+    systems, (1/r^2)/|D_n + i E_n| (resonance amplifies, H10); scale: sum n^2 |c_n|.
+    """
+    top = a.shape[0] - 1
+    while top > 1 and a[top] == 0.0 and b[top] == 0.0:
+        top -= 1  # padding and the cut round-off floor
+    inv_r2 = 1.0 / (r * r)
+    w = np.empty(top + 1)
+    scale = 0.0
+    for n in range(1, top + 1):
+        c = math.sqrt(a[n] * a[n] + b[n] * b[n])
+        e = 2.0 * eta * n * f
+        d_no = inv_r2 - n * n * f * f
+        d_dev = 1.0 + inv_r2 - n * n * f * f
+        g = max(1.0, inv_r2 / math.sqrt(d_no * d_no + e * e),
+                inv_r2 / math.sqrt(d_dev * d_dev + e * e))
+        w[n] = n * n * c * min(g, 1e300)
+        scale += n * n * c
+    tail = 0.0
+    m = top
+    if forced > 0:
+        m = min(int(forced), top)
+        for n in range(m + 1, top + 1):
+            tail += w[n]
+        return m, tail / scale
+    for n in range(top, 0, -1):
+        if tail + w[n] > tol * scale:
+            m = n
+            break
+        tail += w[n]
+    return m, tail / scale
+
+
+@njit(**KERNEL_OPTIONS)
+def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
+    """Metrics of dynamics.md §2.6 for one (f, r, eta): writes OUTPUTS into out, returns status."""
+    for k in range(out.shape[0]):
+        out[k] = math.nan
+    out[0] = gamma0
+    m, trunc = choose_harmonics(a, b, f, r, eta, tol, forced)
+    out[7] = m
+    out[8] = trunc
+    inv_r2 = 1.0 / (r * r)
+    k_no, k_dev = inv_r2, 1.0 + inv_r2
+    gamma_s = 0.5 * gamma0 if neutral == NEUTRAL_HALF_SWING else a[0]
+    margin = math.inf
+    resonant = False
+    zr = np.empty(m + 1)
+    zi = np.empty(m + 1)  # rigid gamma
+    ir = np.empty(m + 1)
+    ii = np.empty(m + 1)  # invariant, no device
+    jr = np.empty(m + 1)
+    ji = np.empty(m + 1)  # invariant, device
+    nr = np.empty(m + 1)
+    ni = np.empty(m + 1)  # mass motion, no device
+    dr = np.empty(m + 1)
+    di = np.empty(m + 1)  # mass motion, device
+    for n in range(1, m + 1):
+        e = 2.0 * eta * n * f
+        n2f2 = n * n * f * f
+        d_no, d_dev = k_no - n2f2, k_dev - n2f2
+        margin = min(margin, abs(d_no) / k_no, abs(d_dev) / k_dev)
+        if (math.sqrt(d_no * d_no + e * e) <= res_tol * k_no
+                or math.sqrt(d_dev * d_dev + e * e) <= res_tol * k_dev):
+            resonant = True
+            continue
+        zr[n], zi[n] = a[n], b[n]
+        ir[n], ii[n] = _apply(*_gain(-n2f2, e, d_no, e), a[n], b[n])  # G_i
+        jr[n], ji[n] = _apply(*_gain(1.0 - n2f2, e, d_dev, e), a[n], b[n])  # G_zr
+        nr[n], ni[n] = _apply(*_gain(inv_r2, 0.0, d_no, e), a[n], b[n])  # H: mass / rocker
+        dr[n], di[n] = _apply(*_gain(inv_r2, 0.0, d_dev, e), a[n], b[n])
+    out[9] = margin
+    if resonant:
+        return st.RESONANCE
+    zr[0] = zi[0] = ir[0] = ii[0] = jr[0] = ji[0] = nr[0] = ni[0] = dr[0] = di[0] = 0.0
+    static_dev = (a[0] - gamma_s) * r * r / (1.0 + r * r)  # a0 - C0 (dynamics.md §2.5)
+    # the five series on one grid, sharing the cos/sin recurrence, then refined peaks
+    ns = max(32, 8 * m)
+    vals = np.zeros((5, ns))
+    for j in range(ns):
+        theta = TWO_PI * j / ns
+        c, s = math.cos(theta), math.sin(theta)
+        cn, sn = c, s
+        v0 = v1 = v2 = v3 = v4 = 0.0
+        for n in range(1, m + 1):
+            n2 = n * n
+            v0 -= n2 * (zr[n] * cn + zi[n] * sn)
+            v1 += ir[n] * cn + ii[n] * sn
+            v2 += jr[n] * cn + ji[n] * sn
+            v3 -= n2 * (nr[n] * cn + ni[n] * sn)
+            v4 -= n2 * (dr[n] * cn + di[n] * sn)
+            cn, sn = cn * c - sn * s, sn * c + cn * s
+        vals[0, j], vals[1, j], vals[2, j] = v0, v1, v2 + static_dev
+        vals[3, j], vals[4, j] = v3, v4
+    eps_rigid = _refine_peak(vals[0], zr, zi, 0.0, m, 2)
+    m_free = _refine_peak(vals[1], ir, ii, 0.0, m, 0)
+    m_dev = _refine_peak(vals[2], jr, ji, static_dev, m, 0)
+    out[1], out[2] = m_free, m_dev
+    out[3] = m_free / m_dev
+    out[4] = _refine_peak(vals[3], nr, ni, 0.0, m, 2) / eps_rigid
+    out[5] = _refine_peak(vals[4], dr, di, 0.0, m, 2) / eps_rigid
+    out[6] = eps_rigid
+    for k in range(out.shape[0]):
+        if not math.isfinite(out[k]):
+            return st.NONFINITE
+    if trunc > tol:
+        return st.TRUNCATION
+    return st.OK
+
+
+@njit(**KERNEL_OPTIONS)
+def balancer_block(params, geometry_index, coef_a, coef_b, lengths, gamma0s, tol, res_tol,
+                   forced, ok_geometry, out, status):
+    out_i = np.empty(out.shape[0])
+    for i in range(params.shape[1]):
+        g = geometry_index[i]
+        if not ok_geometry[g]:
+            for k in range(out.shape[0]):
+                out[k, i] = math.nan
+            status[i] = st.NOT_ASSEMBLABLE
+            continue
+        n_top = lengths[g]
+        status[i] = response(coef_a[g, :n_top], coef_b[g, :n_top], gamma0s[g], params[4, i],
+                             params[5, i], params[6, i], int(params[7, i]), tol, res_tol,
+                             forced, out_i)
+        for k in range(out.shape[0]):
+            out[k, i] = out_i[k]
+
+
+def balancer_run(params, method):
+    """Registry entry point. Fourier coefficients once per distinct geometry in the block."""
+    forced, tol, res_tol = int(method[0]), method[1], method[2]
+    n = params.shape[1]
+    geometries, index = np.unique(params[:4].T, axis=0, return_inverse=True)
+    size = 1 + N_FFT_MAX // 4
+    coef_a = np.zeros((len(geometries), size))
+    coef_b = np.zeros((len(geometries), size))
+    gamma0s = np.full(len(geometries), np.nan)
+    ok = np.zeros(len(geometries), dtype=np.bool_)
+    lengths = np.full(len(geometries), 2, dtype=np.int64)
+    for g, (l0, l2, l3, sigma) in enumerate(geometries):
+        if not crank_turns_fully(l0, 1.0, l2, l3, 1e-12) or min(l0, l2, l3) < 1.0:
+            continue  # not a crank-rocker: no periodic rocker motion to balance
+        a, b, gamma0 = fourier_coefficients(l0, 1.0, l2, l3, sigma, tol=min(tol, 1e-12))
+        coef_a[g, :a.shape[0]] = a
+        coef_b[g, :b.shape[0]] = b
+        nonzero = np.nonzero(np.hypot(a, b))[0]
+        lengths[g] = max(2, int(nonzero[-1]) + 1 if nonzero.size else 2)
+        if forced > 0:
+            lengths[g] = max(lengths[g], min(forced + 1, a.shape[0]))
+        gamma0s[g] = gamma0
+        ok[g] = True
+    out = np.empty((len(OUTPUTS), n))
+    status = np.empty(n, dtype=np.int8)
+    balancer_block(np.ascontiguousarray(params), index.ravel().astype(np.int64), coef_a,
+                   coef_b, lengths, gamma0s, tol, res_tol, forced, ok, out, status)
+    return out, status, np.empty((0, n, 0))
+
+
+# ---------------------------------------------------------------- time-domain cross-check
+
+@njit(**KERNEL_OPTIONS)
+def _gamma_exact(theta, l0, l1, l2, l3, sigma, beta_min):
+    b = rocker_angle(theta, l0, l1, l2, l3, sigma)
+    return (b - beta_min + math.pi) % TWO_PI - math.pi
+
+
+@njit(**KERNEL_OPTIONS)
+def _rhs(theta, y0, y1, forcing_const, stiff, damp, f2, geo, beta_min, homogeneous):
+    """(g', g'') of (B4)/(B9); the homogeneous system drops the forcing."""
+    force = 0.0
+    if not homogeneous:
+        force = forcing_const + geo[4] * _gamma_exact(theta, geo[0], geo[1], geo[2], geo[3],
+                                                      geo[5], beta_min)
+    return y1, (force - stiff * y0 - damp * y1) / f2
+
+
+@njit(**KERNEL_OPTIONS)
+def shooting(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device, steps):
+    """Periodic steady state of (B4)/(B9) driven by the exact rocker motion, by shooting:
+    x0 = (I - Phi)^-1 x_p(2 pi) with fixed-step RK4 over one revolution (dynamics.md B-O6).
+
+    Returns theta_j, g(theta_j), g''(theta_j) at steps + 1 points. Needs steps well above the
+    fastest mode's 2 pi sqrt(K)/f / 2.8 (H7: RK4 is unstable beyond |h lambda| = 2 sqrt 2).
+    """
+    gam, gamma0 = rocker_samples(l0, l1, l2, l3, sigma, 256)
+    beta0 = rocker_angle(0.0, l0, l1, l2, l3, sigma)
+    beta_min = beta0 - gam[0]  # gamma = beta - beta_min, unwrapped about beta0
+    inv_r2 = 1.0 / (r * r)
+    stiff = 1.0 + inv_r2 if device else inv_r2
+    const = gamma_s if device else 0.0
+    geo = np.array([l0, l1, l2, l3, inv_r2, sigma])
+    f2 = f * f
+    damp = 2.0 * eta * f
+    h = TWO_PI / steps
+    # columns: particular solution from 0, and the two homogeneous solutions (Phi)
+    y = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    for pass_ in range(2):
+        if pass_ == 1:
+            # x0 = (I - Phi)^-1 x_p(2 pi)
+            p00, p01 = 1.0 - y[1, 0], -y[2, 0]
+            p10, p11 = -y[1, 1], 1.0 - y[2, 1]
+            det = p00 * p11 - p01 * p10
+            x0 = (p11 * y[0, 0] - p01 * y[0, 1]) / det
+            x1 = (-p10 * y[0, 0] + p00 * y[0, 1]) / det
+            thetas = np.empty(steps + 1)
+            g = np.empty(steps + 1)
+            g2 = np.empty(steps + 1)
+            y = np.array([[x0, x1], [1.0, 0.0], [0.0, 1.0]])
+        for j in range(steps + 1):
+            t = j * h
+            if pass_ == 1:
+                thetas[j] = t
+                g[j] = y[0, 0]
+                g2[j] = _rhs(t, y[0, 0], y[0, 1], const, stiff, damp, f2, geo, beta_min,
+                             False)[1]
+            if j == steps:
+                break
+            for col in range(3 if pass_ == 0 else 1):
+                hom = col > 0
+                a0, a1 = y[col, 0], y[col, 1]
+                k1 = _rhs(t, a0, a1, const, stiff, damp, f2, geo, beta_min, hom)
+                k2 = _rhs(t + 0.5 * h, a0 + 0.5 * h * k1[0], a1 + 0.5 * h * k1[1], const,
+                          stiff, damp, f2, geo, beta_min, hom)
+                k3 = _rhs(t + 0.5 * h, a0 + 0.5 * h * k2[0], a1 + 0.5 * h * k2[1], const,
+                          stiff, damp, f2, geo, beta_min, hom)
+                k4 = _rhs(t + h, a0 + h * k3[0], a1 + h * k3[1], const, stiff, damp, f2, geo,
+                          beta_min, hom)
+                y[col, 0] = a0 + h / 6.0 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+                y[col, 1] = a1 + h / 6.0 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+    return thetas, g, g2
