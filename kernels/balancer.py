@@ -384,56 +384,83 @@ def _rhs(theta, y0, y1, forcing_const, stiff, damp, f2, geo, beta_min, homogeneo
 
 
 @njit(**KERNEL_OPTIONS)
+def _rk4(t, a0, a1, h, const, stiff, damp, f2, geo, beta_min, hom):
+    """One classical RK4 step of (B4)/(B9)."""
+    k1 = _rhs(t, a0, a1, const, stiff, damp, f2, geo, beta_min, hom)
+    k2 = _rhs(t + 0.5 * h, a0 + 0.5 * h * k1[0], a1 + 0.5 * h * k1[1], const, stiff, damp,
+              f2, geo, beta_min, hom)
+    k3 = _rhs(t + 0.5 * h, a0 + 0.5 * h * k2[0], a1 + 0.5 * h * k2[1], const, stiff, damp,
+              f2, geo, beta_min, hom)
+    k4 = _rhs(t + h, a0 + h * k3[0], a1 + h * k3[1], const, stiff, damp, f2, geo, beta_min,
+              hom)
+    return (a0 + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
+            a1 + h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]))
+
+
+@njit(**KERNEL_OPTIONS)
+def _setup(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device):
+    gam, gamma0 = rocker_samples(l0, l1, l2, l3, sigma, 256)
+    beta_min = rocker_angle(0.0, l0, l1, l2, l3, sigma) - gam[0]  # gamma = beta - beta_min
+    inv_r2 = 1.0 / (r * r)
+    stiff = 1.0 + inv_r2 if device else inv_r2
+    const = gamma_s if device else 0.0
+    return np.array([l0, l1, l2, l3, inv_r2, sigma]), beta_min, stiff, const, 2.0 * eta * f
+
+
+@njit(**KERNEL_OPTIONS)
 def shooting(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device, steps):
     """Periodic steady state of (B4)/(B9) driven by the exact rocker motion, by shooting:
     x0 = (I - Phi)^-1 x_p(2 pi) with fixed-step RK4 over one revolution (dynamics.md B-O6).
 
-    Returns theta_j, g(theta_j), g''(theta_j) at steps + 1 points. Needs steps well above the
-    fastest mode's 2 pi sqrt(K)/f / 2.8 (H7: RK4 is unstable beyond |h lambda| = 2 sqrt 2).
+    Returns theta_j, g(theta_j), g''(theta_j) at steps + 1 points. Accurate when the step
+    resolves the fastest mode sqrt(K)/f (H7); the periodic orbit of the discrete map exists
+    even where time-marching would blow up, it is then just wrong.
     """
-    gam, gamma0 = rocker_samples(l0, l1, l2, l3, sigma, 256)
-    beta0 = rocker_angle(0.0, l0, l1, l2, l3, sigma)
-    beta_min = beta0 - gam[0]  # gamma = beta - beta_min, unwrapped about beta0
-    inv_r2 = 1.0 / (r * r)
-    stiff = 1.0 + inv_r2 if device else inv_r2
-    const = gamma_s if device else 0.0
-    geo = np.array([l0, l1, l2, l3, inv_r2, sigma])
+    geo, beta_min, stiff, const, damp = _setup(l0, l1, l2, l3, sigma, f, r, eta, gamma_s,
+                                               device)
     f2 = f * f
-    damp = 2.0 * eta * f
     h = TWO_PI / steps
-    # columns: particular solution from 0, and the two homogeneous solutions (Phi)
-    y = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-    for pass_ in range(2):
-        if pass_ == 1:
-            # x0 = (I - Phi)^-1 x_p(2 pi)
-            p00, p01 = 1.0 - y[1, 0], -y[2, 0]
-            p10, p11 = -y[1, 1], 1.0 - y[2, 1]
-            det = p00 * p11 - p01 * p10
-            x0 = (p11 * y[0, 0] - p01 * y[0, 1]) / det
-            x1 = (-p10 * y[0, 0] + p00 * y[0, 1]) / det
-            thetas = np.empty(steps + 1)
-            g = np.empty(steps + 1)
-            g2 = np.empty(steps + 1)
-            y = np.array([[x0, x1], [1.0, 0.0], [0.0, 1.0]])
-        for j in range(steps + 1):
-            t = j * h
-            if pass_ == 1:
-                thetas[j] = t
-                g[j] = y[0, 0]
-                g2[j] = _rhs(t, y[0, 0], y[0, 1], const, stiff, damp, f2, geo, beta_min,
-                             False)[1]
-            if j == steps:
-                break
-            for col in range(3 if pass_ == 0 else 1):
-                hom = col > 0
-                a0, a1 = y[col, 0], y[col, 1]
-                k1 = _rhs(t, a0, a1, const, stiff, damp, f2, geo, beta_min, hom)
-                k2 = _rhs(t + 0.5 * h, a0 + 0.5 * h * k1[0], a1 + 0.5 * h * k1[1], const,
-                          stiff, damp, f2, geo, beta_min, hom)
-                k3 = _rhs(t + 0.5 * h, a0 + 0.5 * h * k2[0], a1 + 0.5 * h * k2[1], const,
-                          stiff, damp, f2, geo, beta_min, hom)
-                k4 = _rhs(t + h, a0 + h * k3[0], a1 + h * k3[1], const, stiff, damp, f2, geo,
-                          beta_min, hom)
-                y[col, 0] = a0 + h / 6.0 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
-                y[col, 1] = a1 + h / 6.0 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+    # the particular solution from 0 and the two homogeneous solutions (the columns of Phi)
+    p0, p1, u0, u1, v0, v1 = 0.0, 0.0, 1.0, 0.0, 0.0, 1.0
+    for j in range(steps):
+        t = j * h
+        p0, p1 = _rk4(t, p0, p1, h, const, stiff, damp, f2, geo, beta_min, False)
+        u0, u1 = _rk4(t, u0, u1, h, const, stiff, damp, f2, geo, beta_min, True)
+        v0, v1 = _rk4(t, v0, v1, h, const, stiff, damp, f2, geo, beta_min, True)
+    m00, m01, m10, m11 = 1.0 - u0, -v0, -u1, 1.0 - v1
+    det = m00 * m11 - m01 * m10
+    y0 = (m11 * p0 - m01 * p1) / det
+    y1 = (-m10 * p0 + m00 * p1) / det
+    return _record(y0, y1, steps, h, const, stiff, damp, f2, geo, beta_min)
+
+
+@njit(**KERNEL_OPTIONS)
+def _record(y0, y1, steps, h, const, stiff, damp, f2, geo, beta_min):
+    thetas = np.empty(steps + 1)
+    g = np.empty(steps + 1)
+    g2 = np.empty(steps + 1)
+    for j in range(steps + 1):
+        t = j * h
+        thetas[j] = t
+        g[j] = y0
+        g2[j] = _rhs(t, y0, y1, const, stiff, damp, f2, geo, beta_min, False)[1]
+        if j < steps:
+            y0, y1 = _rk4(t, y0, y1, h, const, stiff, damp, f2, geo, beta_min, False)
     return thetas, g, g2
+
+
+@njit(**KERNEL_OPTIONS)
+def march(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device, steps, revolutions):
+    """Brute-force time integration (RK4, steps per revolution) from g = a0, g' = 0 over
+    ``revolutions``; returns the last revolution like ``shooting``. The slow way to a steady
+    state (the transient decays like exp(-eta theta/f)), kept for the hard cases H7-H8."""
+    geo, beta_min, stiff, const, damp = _setup(l0, l1, l2, l3, sigma, f, r, eta, gamma_s,
+                                               device)
+    f2 = f * f
+    h = TWO_PI / steps
+    gam, gamma0 = rocker_samples(l0, l1, l2, l3, sigma, 256)
+    y0, y1 = np.mean(gam), 0.0
+    for rev in range(revolutions - 1):
+        for j in range(steps):
+            y0, y1 = _rk4(j * h, y0, y1, h, const, stiff, damp, f2, geo, beta_min, False)
+    return _record(y0, y1, steps, h, const, stiff, damp, f2, geo, beta_min)

@@ -110,3 +110,54 @@ samples = 720
     np.testing.assert_allclose(zero["transfer_impact_1"], zero["transfer_impact_2"], atol=1e-8)
     with pytest.raises(UserError, match="fixed.direction"):
         spec.parse('mechanism = "six_link"\n[grid]\nbeta = [0.0]\n[fixed]\ndirection = 2')
+
+
+def test_spring_balancer_atlas_and_method_keys(tmp_path, monkeypatch):
+    import kernels.balancer as bl
+
+    calls = []
+    real = bl.fourier_coefficients
+
+    def counting(*args, **kwargs):
+        calls.append(args)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(bl, "fourier_coefficients", counting)
+    text = '''
+mechanism = "spring_balancer"
+[grid]
+f = {start = 0.5, stop = 1.5, num = 11}
+r = [0.5, 1.0, 1.6]
+lambda3 = [2.5, 3.5]
+[method]
+harmonics = "auto"
+'''
+    ds = write(tmp_path, "b.nc", text=text, chunk=10**6)
+    assert len(calls) == 2  # once per geometry, not once per grid point (66 points)
+    meanings = ds["status"].attrs["flag_meanings"].split()
+    codes = dict(zip(meanings, ds["status"].attrs["flag_values"]))
+    # both (3, 1, 3.5, 2.5) and (3, 1, 3.5, 3.5) are crank-rockers
+    assert set(np.unique(ds["status"].values)) <= {codes["ok"], codes["resonance"]}
+    assert ds["swing"].sel(lambda3=2.5).isel(f=0, r=0).item() == pytest.approx(0.983338018,
+                                                                               abs=1e-9)
+    assert '"harmonics": "auto"' in ds.attrs["spec"]
+    with pytest.raises(UserError, match="method.harmonics"):
+        spec.parse('mechanism = "spring_balancer"\n[grid]\nf = [1.0]\n[method]\nharmonics = "many"')
+    with pytest.raises(UserError, match="fixed.eta"):
+        spec.parse('mechanism = "spring_balancer"\n[grid]\nf = [1.0]\n[fixed]\neta = -0.1')
+    s = spec.parse('mechanism = "spring_balancer"\n[grid]\nf = [1.0]\n[method]\nharmonics = 12')
+    assert s.method["harmonics"] == 12.0
+
+
+def test_spring_balancer_rejects_a_geometry_that_is_not_a_crank_rocker(tmp_path):
+    text = '''
+mechanism = "spring_balancer"
+[grid]
+f = [1.0]
+lambda2 = [3.5, 1.2]
+'''
+    ds = write(tmp_path, "c.nc", text=text)
+    meanings = ds["status"].attrs["flag_meanings"].split()
+    codes = dict(zip(meanings, ds["status"].attrs["flag_values"]))
+    assert ds["status"].sel(lambda2=1.2).item() == codes["not_assemblable"]
+    assert np.isnan(ds["swing"].sel(lambda2=1.2).item())

@@ -1,0 +1,81 @@
+"""Spring balancer throughput: grid points per second per core for a sweep over (f, r, eta)
+at one geometry and over many geometries; the gain from computing the Fourier coefficients
+once per geometry; Fourier steady state against RK4 shooting on the exact rocker motion.
+
+Run: .venv/bin/python benchmarks/bench_spring_balancer.py   (writes benchmarks/results/*.json)
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from kernels import balancer as bl  # noqa: E402
+
+
+def best(fn, repeats=3):
+    fn()
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return min(times)
+
+
+def grid(n, geometries, seed=4):
+    rng = np.random.default_rng(seed)
+    p = np.empty((8, n))
+    geo = np.array([[3.0, 3.5, 2.5], [3.0, 3.0, 1.5], [4.0, 3.8, 2.9], [3.5, 3.2, 2.4]])
+    if geometries == 1:
+        p[:3] = geo[0][:, None]
+    else:  # every point its own geometry: the coefficients cannot be shared
+        p[:3] = geo[rng.integers(0, 4, n)].T + rng.uniform(0, 1e-3, (3, n))
+    p[3] = 1.0
+    p[4] = rng.uniform(0.3, 2.0, n)
+    p[5] = rng.uniform(0.3, 2.0, n)
+    p[6] = rng.uniform(0.005, 0.1, n)
+    p[7] = 0.0
+    return p
+
+
+def main():
+    method = np.array([0, 1e-10, 1e-9])
+    bl.balancer_run(grid(10, 1), method)
+    n_shared, n_own = 20000, 200
+    t_shared = best(lambda: bl.balancer_run(grid(n_shared, 1), method))
+    t_own = best(lambda: bl.balancer_run(grid(n_own, n_own), method))
+    a, b, g0 = bl.fourier_coefficients(3.0, 1.0, 3.5, 2.5, 1.0)
+    t_coef = best(lambda: bl.fourier_coefficients(3.0, 1.0, 3.5, 2.5, 1.0))
+    out = np.empty(len(bl.OUTPUTS))
+    t_resp = best(lambda: [bl.response(a, b, g0, 1.1, 0.9, 0.02, 0, 1e-10, 1e-9, 0, out)
+                           for _ in range(1000)]) / 1000
+    bl.shooting(3.0, 1.0, 3.5, 2.5, 1.0, 1.1, 0.9, 0.02, g0 / 2, True, 100)
+    t_shoot = best(lambda: [bl.shooting(3.0, 1.0, 3.5, 2.5, 1.0, 1.1, 0.9, 0.02, g0 / 2, d,
+                                        4000) for d in (False, True)])
+    result = {"machine": platform.node(),
+              "one_geometry_points_per_s": n_shared / t_shared,
+              "own_geometry_points_per_s": n_own / t_own,
+              "gain_coefficients_once_per_geometry": (n_shared / t_shared) / (n_own / t_own),
+              "fourier_coefficients_s": t_coef, "response_s_per_point": t_resp,
+              "shooting_both_systems_4000_steps_s": t_shoot,
+              "fourier_over_shooting_speedup": t_shoot / t_resp}
+    print(f"balancer, 1 thread: {result['one_geometry_points_per_s']:,.0f} points/s sharing one "
+          f"geometry; {result['own_geometry_points_per_s']:,.0f} points/s with a geometry per "
+          f"point; gain {result['gain_coefficients_once_per_geometry']:.0f}x")
+    print(f"  Fourier coefficients {t_coef * 1e3:.1f} ms per geometry, response "
+          f"{t_resp * 1e6:.0f} us per (f, r, eta); shooting (both systems, RK4 4000 steps) "
+          f"{t_shoot * 1e3:.1f} ms: Fourier {result['fourier_over_shooting_speedup']:.0f}x cheaper")
+    out_path = Path(__file__).resolve().parent / "results" / "spring_balancer.json"
+    out_path.write_text(json.dumps(result, indent=2))
+
+
+if __name__ == "__main__":
+    main()
