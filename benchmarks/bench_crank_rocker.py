@@ -204,7 +204,7 @@ def end_to_end(workers, level):
         with tempfile.TemporaryDirectory() as tmp:
             path = Path(tmp) / "bench.nc"
             t = time.perf_counter()
-            atlas.write_atomic(s, path, progress=False, workers=workers, history="benchmark")
+            atlas.run_sweep(s, path, progress=False, workers=workers, history="benchmark")
             wall = time.perf_counter() - t
             size = path.stat().st_size
     finally:

@@ -6,6 +6,7 @@ import datetime as _dt
 import json
 import os
 import platform
+import shutil
 import subprocess
 import sys
 from importlib import metadata
@@ -162,55 +163,180 @@ def _define(nc, ds: xr.Dataset) -> None:
         var.set_var_chunk_cache(size=2 * chunk_bytes + 1024, nelems=11, preemption=1.0)
 
 
-def write_atomic(sweep, path: Path, chunk: int | None = None, workers: int | None = None,
-                 progress: bool = True, history: str | None = None) -> None:
-    """Run the sweep block by block and write the atlas under a temporary name, then rename.
+def partial_dir(path: Path) -> Path:
+    """Where the finished blocks of a run on ``path`` are kept until the atlas is written."""
+    return path.with_name(f".{path.name}.partial")
 
-    Worker threads compute blocks through dask (the numba kernels release the GIL); at most
-    2 x workers blocks are in flight, and only this thread touches the file (netCDF/HDF5 are
-    not thread-safe), so memory stays bounded whatever the grid size. An interrupted or
-    failed run leaves no atlas and no temporary file behind.
+
+def _manifest(sweep, plan) -> dict:
+    return {"spec": sweep.spec_json(), "code_version": code_version(),
+            "chunk_shape": list(plan.chunk_shape), "rows": plan.rows,
+            "blocks": plan.n_blocks}
+
+
+def _open_store(sweep, plan, path: Path, resume: bool, force: bool) -> tuple[Path, set]:
+    """The block store beside the target: new, or checked and reused with --resume."""
+    store = partial_dir(path)
+    manifest = _manifest(sweep, plan)
+    if store.exists():
+        if resume:
+            try:
+                old = json.loads((store / "manifest.json").read_text())
+            except (OSError, ValueError):
+                raise UserError(f"resume: {store} has no readable manifest; rerun with "
+                                "--force to start over") from None
+            for key, what in (("spec", "spec"), ("code_version", "code version"),
+                              ("chunk_shape", "chunk size")):
+                if old.get(key) != manifest[key]:
+                    raise UserError(f"resume: the interrupted run used a different {what}; "
+                                    "rerun with --force to start over")
+            done = {name[:-4] for name in os.listdir(store)
+                    if name.endswith(".npy") and not name.startswith(".")}
+            return store, done
+        if not force:
+            raise UserError(f"output: an interrupted run left {store}; use --resume to "
+                            "continue it or --force to start over")
+        shutil.rmtree(store)
+    elif resume:
+        raise UserError(f"resume: nothing to resume at {store}")
+    store.mkdir()
+    (store / "manifest.json").write_text(json.dumps(manifest))
+    return store, set()
+
+
+def _block_name(index) -> str:
+    return "b" + "_".join(str(i) for i in index)
+
+
+def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None = None,
+              progress: bool = True, history: str | None = None, resume: bool = False,
+              force: bool = False, scheduler: str | None = None) -> dict:
+    """Compute every block (threads here, or a dask.distributed cluster), keep each finished
+    block in a store beside the target, then write the atlas atomically from the store.
+
+    Nothing is lost: a killed run leaves its finished blocks, and ``resume`` computes only
+    the rest (refused for a different spec, code version or chunk size). Blocks are written
+    to the store under a temporary name and renamed, so a kill mid-write leaves no half
+    block. At most 2 x workers blocks are in flight, so memory stays bounded whatever the
+    grid size. Returns {"blocks": total, "reused": done before this run}.
     """
     import concurrent.futures as cf
 
-    import netCDF4
     from tqdm import tqdm
 
-    from sweep.engine import Plan, build, kernel_array
+    from sweep.engine import Plan, kernel_array, run_block
 
     plan = Plan(sweep, chunk)
-    template = build(sweep, chunk)
-    template.attrs["history"] = history or history_line()
-    stacked = kernel_array(plan)
-    workers = workers or os.cpu_count() or 1
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    store, done = _open_store(sweep, plan, path, resume, force)
+    todo = [(index, loc) for index, loc in plan.locations() if _block_name(index) not in done]
 
-    def compute(index):
-        return stacked.blocks[(0,) + index].compute(scheduler="synchronous")
+    def save(index, block):
+        name = _block_name(index)
+        with open(store / f".{name}.tmp", "wb") as fh:
+            np.save(fh, block)
+        os.replace(store / f".{name}.tmp", store / f"{name}.npy")
+
+    bar = tqdm(total=plan.n_blocks, initial=len(done), unit="block", delay=1.5,
+               disable=not progress, file=sys.stderr, desc="sweep")
+    try:
+        if scheduler:
+            _compute_distributed(sweep, todo, save, bar, scheduler, run_block)
+        else:
+            stacked = kernel_array(plan)
+            workers = workers or os.cpu_count() or 1
+            with cf.ThreadPoolExecutor(max_workers=workers) as pool:
+                pending = {}
+                queue = iter(todo)
+                while True:
+                    while len(pending) < 2 * workers:
+                        item = next(queue, None)
+                        if item is None:
+                            break
+                        index = item[0]
+                        future = pool.submit(
+                            lambda i: stacked.blocks[(0,) + i].compute(scheduler="sync"), index)
+                        pending[future] = index
+                    if not pending:
+                        break
+                    finished, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+                    for future in finished:
+                        save(pending.pop(future), future.result())
+                        bar.update(1)
+    finally:
+        bar.close()
+    _assemble(sweep, plan, store, path, history)
+    shutil.rmtree(store, ignore_errors=True)
+    return {"blocks": plan.n_blocks, "reused": len(done)}
+
+
+def _compute_distributed(sweep, todo, save, bar, address, run_block) -> None:
+    """Blocks on a dask.distributed cluster, at most 2 per worker thread in flight; a task
+    on a worker that dies is rescheduled by the scheduler, so the result is unchanged."""
+    from distributed import Client, as_completed
 
     try:
-        with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc, \
-                cf.ThreadPoolExecutor(max_workers=workers) as pool, \
-                tqdm(total=plan.n_blocks, unit="block", delay=1.5, disable=not progress,
-                     file=sys.stderr, desc="sweep") as bar:
+        client = Client(address, timeout="10s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as err:
+        raise UserError(f"scheduler: cannot connect to {address} ({type(err).__name__})") \
+            from None
+    try:
+        client.run(_limit_numba_threads)
+        threads = max(1, sum(client.nthreads().values()))
+        remote = client.scatter(sweep, broadcast=True)
+        queue = iter(todo)
+        first = []
+        for _ in range(2 * threads):
+            item = next(queue, None)
+            if item is None:
+                break
+            first.append(client.submit(run_block, remote, item[1], key=f"block-{item[0]}",
+                                       retries=2, pure=False))
+        if not first:
+            return
+        keys = {f"block-{index}": index for index, _ in todo}
+        futures = as_completed(first, loop=client.loop)
+        for future in futures:
+            index = keys[future.key]
+            save(index, future.result())
+            future.release()
+            bar.update(1)
+            item = next(queue, None)
+            if item is not None:
+                futures.add(client.submit(run_block, remote, item[1], key=f"block-{item[0]}",
+                                          retries=2, pure=False))
+    finally:
+        client.close()
+
+
+def _limit_numba_threads():
+    """On each worker: one numba thread per dask thread, so the cores are not oversubscribed
+    (numba.set_num_threads is thread-local; NUMBA_NUM_THREADS covers new threads)."""
+    os.environ["NUMBA_NUM_THREADS"] = "1"
+    try:
+        import numba
+
+        numba.set_num_threads(1)
+    except (ImportError, ValueError):
+        pass
+
+
+def _assemble(sweep, plan, store: Path, path: Path, history: str | None) -> None:
+    """Write the atlas from the block store under a temporary name, then rename."""
+    import netCDF4
+
+    from sweep.engine import build
+
+    template = build(sweep, plan.requested)
+    template.attrs["history"] = history or history_line()
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
             _define(nc, template)
-            pending = {}
-            todo = iter(plan.locations())
-            while True:
-                while len(pending) < 2 * workers:
-                    item = next(todo, None)
-                    if item is None:
-                        break
-                    pending[pool.submit(compute, item[0])] = item[1]
-                if not pending:
-                    break
-                done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
-                for future in done:
-                    location = pending.pop(future)
-                    region = tuple(slice(a, b) for a, b in location)
-                    for name, values in plan.split(future.result()).items():
-                        nc[name][region] = values
-                    bar.update(1)
+            for index, location in plan.locations():
+                block = np.load(store / f"{_block_name(index)}.npy")
+                region = tuple(slice(a, b) for a, b in location)
+                for name, values in plan.split(block).items():
+                    nc[name][region] = values
         os.replace(tmp, path)
     except BaseException:
         tmp.unlink(missing_ok=True)

@@ -53,7 +53,10 @@ def cli():
 @click.option("--chunk", type=click.IntRange(1, 10**8), help="points per task")
 @click.option("--workers", type=click.IntRange(1, 1024), help="threads (default: all cores)")
 @click.option("-q", "--quiet", is_flag=True, help="no progress bar or summary")
-def run(spec_file, output, force, chunk, workers, quiet):
+@click.option("--resume", is_flag=True, help="continue an interrupted run of the same spec")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="run on a dask.distributed cluster, e.g. tcp://10.0.0.5:8786")
+def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
     """Run a sweep; with no SPEC, the built-in default (the crank-rocker design atlas)."""
     from sweep import atlas, spec
 
@@ -65,14 +68,18 @@ def run(spec_file, output, force, chunk, workers, quiet):
         target = Path(output or Path(spec_file).with_suffix(".nc").name)
     if target.suffix != ".nc":
         raise UserError(f"output: {target} must end in .nc")
-    atlas.check_target(target, force)
+    atlas.check_target(target, force or resume)
+    if resume and target.exists():
+        raise UserError(f"resume: {target} is already complete")
     chart_path = target.with_suffix(".png") if sweep_spec.chart else None
     if chart_path is not None and chart_path.exists() and not force:
         raise UserError(f"output: {chart_path} exists; use --force to overwrite it")
 
     started = time.perf_counter()
-    atlas.write_atomic(sweep_spec, target, chunk=chunk, progress=not quiet,
-                       workers=workers or sweep_spec.run.workers)
+    done = atlas.run_sweep(sweep_spec, target, chunk=chunk or sweep_spec.run.chunk,
+                           progress=not quiet, workers=workers or sweep_spec.run.workers,
+                           resume=resume, force=force,
+                           scheduler=scheduler or sweep_spec.run.scheduler)
     elapsed = time.perf_counter() - started
     written = _open_atlas(str(target))
     if chart_path is not None:
@@ -85,6 +92,9 @@ def run(spec_file, output, force, chunk, workers, quiet):
         click.echo(f"atlas: {target.resolve()}")
         if chart_path is not None:
             click.echo(f"chart: {chart_path.resolve()}")
+        if done["reused"]:
+            click.echo(f"resumed: {done['reused']} of {done['blocks']} blocks were already "
+                       "done")
         click.echo(f"{sweep_spec.size} points in {elapsed:.2f} s; status: "
                    + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
     written.close()

@@ -76,6 +76,7 @@ class Plan:
 
     def __init__(self, sweep: Sweep, chunk: int | None = None):
         self.sweep = sweep
+        self.requested = chunk
         self.shape = sweep.shape
         self.angles = sweep.profile_coordinate()
         self.n_out = len(sweep.scalar_outputs)

@@ -42,6 +42,7 @@ class RunSettings(_Strict):
     chunk: StrictInt = Field(default=131072, ge=1, le=10**8)  # points per task
     workers: StrictInt | None = Field(default=None, ge=1, le=1024)  # threads; None: all cores
     compress_level: StrictInt = Field(default=1, ge=0, le=9)  # zlib level, 0 = off
+    scheduler: StrictStr | None = None  # dask.distributed scheduler address
 
 
 class ChartSettings(_Strict):

@@ -25,7 +25,7 @@ omega1 = [30.0, -20.0]
 def write(tmp_path, name, chunk=None, workers=None, text=SPEC):
     s = spec.parse(text)
     path = tmp_path / name
-    atlas.write_atomic(s, path, chunk=chunk, progress=False, workers=workers, history="test")
+    atlas.run_sweep(s, path, chunk=chunk, progress=False, workers=workers, history="test")
     return xr.open_dataset(path)
 
 
@@ -80,8 +80,10 @@ def test_chunk_choice_is_balanced_and_bounded():
     assert np.prod(c) <= 4096 and c[2] == 3
 
 
-def test_failed_run_leaves_nothing(tmp_path, monkeypatch):
-    """A block that fails partway (after others were written) leaves no atlas, no temp file."""
+def test_failed_run_leaves_no_atlas_but_keeps_its_finished_blocks(tmp_path, monkeypatch,
+                                                                  reference):
+    """A block that fails partway: no atlas and no temporary netCDF, but the finished blocks
+    stay in the store, and --resume computes only the rest, to the same bits."""
     s = spec.parse(SPEC)
     calls = []
     real = engine.run_block
@@ -93,9 +95,35 @@ def test_failed_run_leaves_nothing(tmp_path, monkeypatch):
         return real(sweep, location)
 
     monkeypatch.setattr(engine, "run_block", flaky)
+    target = tmp_path / "a.nc"
     with pytest.raises(RuntimeError):
-        atlas.write_atomic(s, tmp_path / "a.nc", chunk=50, progress=False, workers=2)
-    assert len(calls) >= 5 and list(tmp_path.iterdir()) == []
+        atlas.run_sweep(s, target, chunk=50, progress=False, workers=1)
+    assert not target.exists() and not list(tmp_path.glob(".a.nc.tmp*"))
+    kept = list(atlas.partial_dir(target).glob("*.npy"))
+    assert len(kept) >= 4
+    monkeypatch.setattr(engine, "run_block", real)
+    calls.clear()
+    monkeypatch.setattr(engine, "run_block", lambda sw, loc: (calls.append(loc), real(sw, loc))[1])
+    done = atlas.run_sweep(s, target, chunk=50, progress=False, workers=2, resume=True,
+                           history="test")
+    assert done["reused"] == len(kept) and len(calls) == done["blocks"] - len(kept)
+    assert not atlas.partial_dir(target).exists()
+    ds = xr.open_dataset(target)
+    for name in reference.data_vars:
+        assert np.array_equal(ds[name].values, reference[name].values, equal_nan=True)
+
+
+def test_resume_refuses_a_different_spec(tmp_path, monkeypatch):
+    s = spec.parse(SPEC)
+    target = tmp_path / "a.nc"
+    monkeypatch.setattr(engine, "run_block", lambda *a: (_ for _ in ()).throw(KeyboardInterrupt))
+    with pytest.raises(KeyboardInterrupt):
+        atlas.run_sweep(s, target, chunk=50, progress=False, workers=1)
+    other = spec.parse(SPEC.replace("num = 13", "num = 14"))
+    with pytest.raises(UserError, match="different spec"):
+        atlas.run_sweep(other, target, chunk=50, progress=False, resume=True)
+    with pytest.raises(UserError, match="--resume"):
+        atlas.run_sweep(s, target, chunk=50, progress=False)  # neither resume nor force
 
 
 def test_in_memory_dataset_equals_the_written_atlas(tmp_path, reference):

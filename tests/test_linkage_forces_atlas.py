@@ -23,7 +23,7 @@ peak_samples = 181
 
 def write(tmp_path, name, chunk=None, workers=None, text=SPEC):
     s = spec.parse(text)
-    atlas.write_atomic(s, tmp_path / name, chunk=chunk, progress=False, workers=workers,
+    atlas.run_sweep(s, tmp_path / name, chunk=chunk, progress=False, workers=workers,
                        history="test")
     return xr.open_dataset(tmp_path / name)
 
