@@ -259,14 +259,30 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
                     if not pending:
                         break
                     finished, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
-                    for future in finished:
-                        save(pending.pop(future), future.result())
-                        bar.update(1)
+                    failure = _save_finished(finished, pending, save, bar)
+                    if failure is not None:
+                        # keep every block that still finishes, then report the failure
+                        _save_finished(cf.wait(pending)[0], pending, save, bar)
+                        raise failure
     finally:
         bar.close()
     _assemble(sweep, plan, store, path, history)
     shutil.rmtree(store, ignore_errors=True)
     return {"blocks": plan.n_blocks, "reused": len(done)}
+
+
+def _save_finished(finished, pending, save, bar):
+    """Store every successful block of ``finished``; return the first failure, if any."""
+    failure = None
+    for future in finished:
+        index = pending.pop(future)
+        error = future.exception()
+        if error is None:
+            save(index, future.result())
+            bar.update(1)
+        elif failure is None:
+            failure = error
+    return failure
 
 
 def _compute_distributed(sweep, todo, save, bar, address, run_block) -> None:
