@@ -82,6 +82,9 @@ def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
                               ancillary_variables="status")
         if o.description:
             ds[name].attrs["comment"] = o.description
+        if o.flags:
+            ds[name].attrs.update(flag_values=np.arange(len(o.flags), dtype=np.float64),
+                                  flag_meanings=" ".join(o.flags))
         chunks = chunk_shape + tuple(ds.sizes[d] for d in ds[name].dims[len(chunk_shape):])
         ds[name].encoding.update(zlib=level > 0, complevel=level, shuffle=True,
                                  chunksizes=chunks, _FillValue=np.nan)

@@ -16,7 +16,7 @@ import click
 from sweep.errors import UserError
 
 EXAMPLES = {name: f"{name}.toml" for name in ("crank_rocker", "linkage_forces", "six_link",
-                                                "spring_balancer")}
+                                                "spring_balancer", "rotary_pendulum")}
 DEFAULT_EXAMPLE = "crank_rocker"
 
 

@@ -81,6 +81,7 @@ class Output:
     units: str
     long_name: str
     description: str = ""
+    flags: tuple[str, ...] = ()  # a categorical output: its codes 0, 1, ... mean these
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,567 @@
+"""Rotary-pendulum impact mechanism (seed 004; dynamics.md §1): closed forms and a numba
+integration core with event location.
+
+Dimensionless time tau = omega1 t (' = d/dtau); psi is the pendulum angle relative to the
+rotor, psi = 0 the impact position, psi < 0 in flight. Models:
+    paper (P1-P2):  psi'' = -a(psi) (psi'^2 + xi) sin psi,  a = k X/(1 + xi X),
+                    X = k^2 + 1 + 2 k cos psi
+    rigid (P5):     psi'' = -kappa k sin psi
+Impact on the rotor stop (psi = 0, the paper's case): psi'+ = -(1+k)(1+R) - R psi'-.
+A flight is time-reversible, so the impact map on the pre-impact speed is affine,
+v_{j+1} = (1+k)(1+R) + R v_j, with fixed point v* = (1+k)(1+R)/(1-R) (P-O6).
+
+omega1 enters only as a time scale: every output here is dimensionless and the sweep
+rescales it (A and n unchanged, T ~ 1/omega1, accelerations ~ omega1^2, speeds ~ omega1 l2).
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from kernels import KERNEL_OPTIONS
+from kernels import status as st
+
+MODEL_PAPER, MODEL_RIGID = 0, 1
+REGIME_PERIOD_1, REGIME_ESCAPE = 0, 1  # codes in the regime output (see the registry)
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(96)  # for the half-period quadrature
+
+
+# ------------------------------------------------------------------ paper model, closed form
+
+@njit(**KERNEL_OPTIONS)
+def _g(x, xi):
+    """g(X) = ln(1 + xi X)/xi^2 - X/xi: the first integral is (psi'^2 + xi) exp(-g) = const."""
+    return math.log1p(xi * x) / (xi * xi) - x / xi
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_critical_speed(k, xi):
+    """v_crit (P4): launched from psi = 0 faster than this, the pendulum goes over the top."""
+    return math.sqrt(xi * math.expm1(_g((k - 1.0) ** 2, xi) - _g((1.0 + k) ** 2, xi)))
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_u(psi, v, k, xi):
+    """psi'^2 as a function of psi on the flight launched from psi = 0 with speed v (P3)."""
+    x0 = (1.0 + k) ** 2
+    x = k * k + 1.0 + 2.0 * k * math.cos(psi)
+    return (v * v + xi) * math.exp(_g(x0, xi) - _g(x, xi)) - xi
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_amplitude(v, k, xi):
+    """Amplitude A (P-O2): the root of u(A) = 0 in (0, pi), by safeguarded Newton on
+    X_A = k^2 + 1 + 2k cos A. NaN if v >= v_crit (escape)."""
+    if v >= paper_critical_speed(k, xi):
+        return math.nan
+    x0 = (1.0 + k) ** 2
+    target = math.log(v * v + xi) - math.log(xi) + _g(x0, xi)  # = g(X_A), g decreasing
+    lo, hi = (k - 1.0) ** 2, x0
+    x = 0.5 * (lo + hi)
+    for _ in range(200):
+        f = _g(x, xi) - target
+        if f > 0.0:
+            lo = x
+        else:
+            hi = x
+        slope = 1.0 / (xi * (1.0 + xi * x)) - 1.0 / xi
+        step = x - f / slope
+        x_new = step if lo < step < hi else 0.5 * (lo + hi)
+        if abs(x_new - x) <= 1e-16 * x0:
+            x = x_new
+            break
+        x = x_new
+    c = (x - k * k - 1.0) / (2.0 * k)
+    return math.acos(min(1.0, max(-1.0, c)))
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_half_period(v, k, xi, amplitude):
+    """Flight time from impact to impact, tau1 = 2 int_0^A dpsi / sqrt(u) (P-O3), with
+    psi = A sin s removing the end singularity, by 96-point Gauss-Legendre."""
+    total = 0.0
+    half = 0.25 * math.pi
+    for j in range(_GL_X.shape[0]):
+        s = half * (_GL_X[j] + 1.0)
+        u = paper_u(amplitude * math.sin(s), v, k, xi)
+        total += _GL_W[j] * amplitude * math.cos(s) / math.sqrt(max(u, 1e-300))
+    return 2.0 * half * total
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_peak_acceleration(v, k, xi, amplitude):
+    """max |psi''| over the flight = max over psi in [0, A] of a (u + xi) |sin psi| (P-O4):
+    a dense sample, then golden-section search around the best sample."""
+    def accel(psi):
+        x = k * k + 1.0 + 2.0 * k * math.cos(psi)
+        a = k * x / (1.0 + xi * x)
+        return a * (paper_u(psi, v, k, xi) + xi) * abs(math.sin(psi))
+
+    n = 256
+    best_j, best = 0, -1.0
+    for j in range(n + 1):
+        val = accel(amplitude * j / n)
+        if val > best:
+            best_j, best = j, val
+    lo = amplitude * max(0, best_j - 1) / n
+    hi = amplitude * min(n, best_j + 1) / n
+    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+    for _ in range(100):
+        c = hi - ratio * (hi - lo)
+        d = lo + ratio * (hi - lo)
+        if accel(c) > accel(d):
+            hi = d
+        else:
+            lo = c
+        if hi - lo < 1e-15 * amplitude:
+            break
+    return max(best, accel(0.5 * (lo + hi)))
+
+
+# ------------------------------------------------------------------ rigid model, closed form
+
+@njit(**KERNEL_OPTIONS)
+def ellipk(m):
+    """Complete elliptic integral K(m) = pi / (2 AGM(1, sqrt(1 - m))), m < 1 (as scipy's
+    ellipk, parameter m = k^2; matches it to ~2e-16)."""
+    a, b = 1.0, math.sqrt(1.0 - m)
+    for _ in range(60):
+        if abs(a - b) <= 1e-16 * a:
+            break
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+    return 0.5 * math.pi / a
+
+
+@njit(**KERNEL_OPTIONS)
+def rigid_flight(v, omega2):
+    """Rigid pendulum psi'' = -Omega^2 sin psi launched from psi = 0 with speed v:
+    (amplitude, flight time tau1, peak |psi''|) for m = v^2/(4 Omega^2) < 1 (P-O8),
+    NaNs at and beyond the separatrix m = 1 (the pendulum goes over the top)."""
+    omega = math.sqrt(omega2)
+    m = v * v / (4.0 * omega2)
+    if not m < 1.0:
+        return math.nan, math.nan, math.nan
+    amplitude = 2.0 * math.asin(math.sqrt(m))
+    tau1 = 2.0 * ellipk(m) / omega
+    return amplitude, tau1, omega2 * math.sin(min(amplitude, 0.5 * math.pi))
+
+
+# ------------------------------------------------------------------ the impact map
+
+@njit(**KERNEL_OPTIONS)
+def steady_state_speed(k, r):
+    """Fixed point of the affine impact map: pre-impact (= launch) speed v* (P-O6)."""
+    return (1.0 + k) * (1.0 + r) / (1.0 - r)
+
+
+@njit(**KERNEL_OPTIONS)
+def impacts_to_converge(k, r, v_crit, tol):
+    """Impacts from rest (v_0 = 0) until |v_j - v*| <= tol v*, or until the launch speed
+    reaches v_crit (escape): returns (count, escaped). v_j - v* = -v* R^j exactly."""
+    v_star = steady_state_speed(k, r)
+    v = 0.0
+    for j in range(1, 100000):
+        launch = (1.0 + k) * (1.0 + r) + r * v  # speed after impact j
+        if launch >= v_crit:
+            return j, True
+        v = launch  # a reversible flight returns with the launch speed
+        if abs(v - v_star) <= tol * v_star:
+            return j, False
+    return 100000, False
+
+
+# ------------------------------------------------------------------ integration core
+
+FLIGHT_IMPACT, FLIGHT_ESCAPE, FLIGHT_MAX_STEPS, FLIGHT_UNDERFLOW = 0, 1, 2, 3
+METHOD_RK4, METHOD_DOPRI5 = 0, 1
+SUBSTEP_SAMPLES = 4  # interior sign samples per step: a flight shorter than a step is seen
+
+# Dormand-Prince 5(4) tableau
+_C2, _C3, _C4, _C5 = 1 / 5, 3 / 10, 4 / 5, 8 / 9
+_A21 = 1 / 5
+_A31, _A32 = 3 / 40, 9 / 40
+_A41, _A42, _A43 = 44 / 45, -56 / 15, 32 / 9
+_A51, _A52, _A53, _A54 = 19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729
+_A61, _A62, _A63, _A64, _A65 = 9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656
+_B1, _B3, _B4, _B5, _B6 = 35 / 384, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84
+_E1, _E3, _E4, _E5, _E6, _E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200,
+                                22 / 525, -1 / 40)
+
+
+@njit(**KERNEL_OPTIONS)
+def acceleration(model, psi, dpsi, k, xi, kappa):
+    """psi'' of the model (P1-P2 or P5)."""
+    s = math.sin(psi)
+    if model == MODEL_PAPER:
+        x = k * k + 1.0 + 2.0 * k * math.cos(psi)
+        return -k * x / (1.0 + xi * x) * (dpsi * dpsi + xi) * s
+    return -kappa * k * s
+
+
+@njit(**KERNEL_OPTIONS)
+def _dopri_step(model, y0, y1, f0, h, k, xi, kappa):
+    """One DOPRI5 step: (new psi, new psi', new f, error estimates of psi and psi')."""
+    def f(a, b):
+        return acceleration(model, a, b, k, xi, kappa)
+
+    k1a, k1b = y1, f0
+    p, q = y0 + h * _A21 * k1a, y1 + h * _A21 * k1b
+    k2a, k2b = q, f(p, q)
+    p = y0 + h * (_A31 * k1a + _A32 * k2a)
+    q = y1 + h * (_A31 * k1b + _A32 * k2b)
+    k3a, k3b = q, f(p, q)
+    p = y0 + h * (_A41 * k1a + _A42 * k2a + _A43 * k3a)
+    q = y1 + h * (_A41 * k1b + _A42 * k2b + _A43 * k3b)
+    k4a, k4b = q, f(p, q)
+    p = y0 + h * (_A51 * k1a + _A52 * k2a + _A53 * k3a + _A54 * k4a)
+    q = y1 + h * (_A51 * k1b + _A52 * k2b + _A53 * k3b + _A54 * k4b)
+    k5a, k5b = q, f(p, q)
+    p = y0 + h * (_A61 * k1a + _A62 * k2a + _A63 * k3a + _A64 * k4a + _A65 * k5a)
+    q = y1 + h * (_A61 * k1b + _A62 * k2b + _A63 * k3b + _A64 * k4b + _A65 * k5b)
+    k6a, k6b = q, f(p, q)
+    n0 = y0 + h * (_B1 * k1a + _B3 * k3a + _B4 * k4a + _B5 * k5a + _B6 * k6a)
+    n1 = y1 + h * (_B1 * k1b + _B3 * k3b + _B4 * k4b + _B5 * k5b + _B6 * k6b)
+    k7a, k7b = n1, f(n0, n1)  # first-same-as-last
+    e0 = h * (_E1 * k1a + _E3 * k3a + _E4 * k4a + _E5 * k5a + _E6 * k6a + _E7 * k7a)
+    e1 = h * (_E1 * k1b + _E3 * k3b + _E4 * k4b + _E5 * k5b + _E6 * k6b + _E7 * k7b)
+    return n0, n1, k7b, e0, e1
+
+
+@njit(**KERNEL_OPTIONS)
+def _rk4_step(model, y0, y1, f0, h, k, xi, kappa):
+    def f(a, b):
+        return acceleration(model, a, b, k, xi, kappa)
+
+    k1a, k1b = y1, f0
+    k2a = y1 + 0.5 * h * k1b
+    k2b = f(y0 + 0.5 * h * k1a, k2a)
+    k3a = y1 + 0.5 * h * k2b
+    k3b = f(y0 + 0.5 * h * k2a, k3a)
+    k4a = y1 + h * k3b
+    k4b = f(y0 + h * k3a, k4a)
+    n0 = y0 + h / 6.0 * (k1a + 2.0 * k2a + 2.0 * k3a + k4a)
+    n1 = y1 + h / 6.0 * (k1b + 2.0 * k2b + 2.0 * k3b + k4b)
+    return n0, n1, f(n0, n1)
+
+
+@njit(**KERNEL_OPTIONS)
+def _hermite(s, h, y0, d0, y1, d1):
+    """Cubic Hermite interpolant of psi on a step, at s in [0, h] (psi' at the ends = d)."""
+    t = s / h
+    t2, t3 = t * t, t * t * t
+    return ((2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + t) * h * d0
+            + (-2 * t3 + 3 * t2) * y1 + (t3 - t2) * h * d1)
+
+
+@njit(**KERNEL_OPTIONS)
+def _first_crossing(h, y0, d0, y1, d1, level, upward):
+    """First s in (0, h] where psi crosses ``level`` in the given direction, from sign
+    samples of the step interpolant (the step start itself never counts: H4). -1 if none."""
+    prev_s, prev = 0.0, y0 - level
+    for j in range(1, SUBSTEP_SAMPLES + 2):
+        s = h * j / (SUBSTEP_SAMPLES + 1)
+        val = (_hermite(s, h, y0, d0, y1, d1) if j <= SUBSTEP_SAMPLES else y1) - level
+        crossed = (prev < 0.0 <= val) if upward else (prev > 0.0 >= val)
+        if crossed:
+            lo, hi, flo = prev_s, s, prev  # Illinois (regula falsi) on the interpolant
+            fhi = val
+            side = 0
+            for _ in range(100):
+                mid = hi - fhi * (hi - lo) / (fhi - flo)
+                fm = _hermite(mid, h, y0, d0, y1, d1) - level
+                if (fm < 0.0) == (flo < 0.0):
+                    lo, flo = mid, fm
+                    if side == -1:
+                        fhi *= 0.5
+                    side = -1
+                else:
+                    hi, fhi = mid, fm
+                    if side == 1:
+                        flo *= 0.5
+                    side = 1
+                if hi - lo <= 1e-15 * h or fm == 0.0:
+                    break
+            return mid
+        prev_s, prev = s, val
+    return -1.0
+
+
+@njit(**KERNEL_OPTIONS)
+def _refine_peak(model, best, k, xi, kappa, method, exact):
+    """Golden-section search for max |psi''| in a window of steps around the largest
+    sample, with exact partial steps from the window's start (the cubic interpolant's psi'
+    is only third order)."""
+    y0, y1, f0, h, sampled = best
+    if h == 0.0:
+        return exact
+
+    def accel_at(s):
+        if s <= 0.0:
+            return abs(f0)
+        if method == METHOD_DOPRI5:
+            p0, p1, pf, e0, e1 = _dopri_step(model, y0, y1, f0, s, k, xi, kappa)
+        else:
+            p0, p1, pf = _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
+        return abs(pf)
+
+    lo, hi = 0.0, h
+    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+    for _ in range(60):
+        c = hi - ratio * (hi - lo)
+        d = lo + ratio * (hi - lo)
+        if accel_at(c) > accel_at(d):
+            hi = d
+        else:
+            lo = c
+        if hi - lo <= 1e-13 * h:
+            break
+    return max(exact, accel_at(0.5 * (lo + hi)))
+
+
+@njit(**KERNEL_OPTIONS)
+def integrate_flight(model, launch, k, xi, kappa, method, rtol, atol, dt, max_steps):
+    """One flight from psi = 0 with psi' = -launch < 0, to the next impact (psi back to 0,
+    upward) or escape (psi reaching -pi: the pendulum goes over the top).
+
+    Returns (status, tau of the event, psi' there, amplitude, peak |psi''|, steps, rejected).
+    The event time is found on the step interpolant and polished by secant iterations on
+    exact partial steps from the step start (atol-limited event times, H5).
+    """
+    t, y0, y1 = 0.0, 0.0, -launch
+    f0 = acceleration(model, y0, y1, k, xi, kappa)
+    best = (0.0, 0.0, 0.0, 0.0, 0.0)  # (y0, y1, f0, window, peak): where to refine the peak
+    prev = (y0, y1, f0, 0.0)  # the start of the previous step and its length
+    h = dt if method == METHOD_RK4 else min(0.1, 0.01 / max(1.0, abs(launch)))
+    steps = rejected = 0
+    lowest = 0.0
+    peak = abs(f0)  # largest sampled |psi''| (interpolated): only picks where to refine
+    exact = abs(f0)  # largest |psi''| at step ends, where the state is the method's own
+    nan = math.nan
+    while steps + rejected < max_steps:
+        if method == METHOD_DOPRI5:
+            n0, n1, fn, e0, e1 = _dopri_step(model, y0, y1, f0, h, k, xi, kappa)
+            sc0 = atol + rtol * max(abs(y0), abs(n0))
+            sc1 = atol + rtol * max(abs(y1), abs(n1))
+            err = math.sqrt(0.5 * ((e0 / sc0) ** 2 + (e1 / sc1) ** 2))
+            if err > 1.0:
+                rejected += 1
+                h *= max(0.2, 0.9 * err ** -0.2)
+                if h < 1e-14 * max(1.0, t):
+                    return FLIGHT_UNDERFLOW, t, nan, nan, nan, steps, rejected
+                continue
+        else:
+            n0, n1, fn = _rk4_step(model, y0, y1, f0, h, k, xi, kappa)
+            err = 0.0
+        steps += 1
+        # events on this step: escape (psi down through -pi) first, then impact (up through 0)
+        for event in range(2):
+            level = -math.pi if event == 0 else 0.0
+            s = _first_crossing(h, y0, y1, n0, n1, level, event == 1)
+            if s < 0.0:
+                continue
+            for _ in range(3):  # secant polish with exact partial steps from the step start
+                if method == METHOD_DOPRI5:
+                    p0, p1, pf, q0, q1 = _dopri_step(model, y0, y1, f0, s, k, xi, kappa)
+                else:
+                    p0, p1, pf = _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
+                if p1 == 0.0:
+                    break
+                s_new = s - (p0 - level) / p1
+                if not (0.0 < s_new <= h) or abs(s_new - s) <= 1e-16 * max(1.0, t):
+                    s = s_new if 0.0 < s_new <= h else s
+                    break
+                s = s_new
+            if method == METHOD_DOPRI5:
+                p0, p1, pf, q0, q1 = _dopri_step(model, y0, y1, f0, s, k, xi, kappa)
+            else:
+                p0, p1, pf = _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
+            status = FLIGHT_ESCAPE if event == 0 else FLIGHT_IMPACT
+            peak = _refine_peak(model, best, k, xi, kappa, method, max(exact, abs(pf)))
+            return status, t + s, p1, -lowest, peak, steps, rejected
+        # the lowest point and the peak acceleration, refined on this step's interpolant
+        if y1 < 0.0 <= n1:
+            a_lo, a_hi = 0.0, h
+            for _ in range(80):
+                m1 = a_lo + (a_hi - a_lo) / 3.0
+                m2 = a_hi - (a_hi - a_lo) / 3.0
+                if _hermite(m1, h, y0, y1, n0, n1) < _hermite(m2, h, y0, y1, n0, n1):
+                    a_hi = m2
+                else:
+                    a_lo = m1
+            lowest = min(lowest, _hermite(0.5 * (a_lo + a_hi), h, y0, y1, n0, n1))
+        lowest = min(lowest, n0)
+        step_peak = abs(fn)
+        for j in range(1, 4):  # psi'' at interior points from the interpolated state
+            s = h * j / 4.0
+            p = _hermite(s, h, y0, y1, n0, n1)
+            tt = s / h  # derivative of the Hermite cubic
+            dp = ((6 * tt * tt - 6 * tt) * y0 / h + (3 * tt * tt - 4 * tt + 1) * y1
+                  + (-6 * tt * tt + 6 * tt) * n0 / h + (3 * tt * tt - 2 * tt) * n1)
+            step_peak = max(step_peak, abs(acceleration(model, p, dp, k, xi, kappa)))
+        exact = max(exact, abs(fn))
+        if step_peak > peak:
+            peak = step_peak
+            # the maximum lies within a step of the best sample: search from the previous
+            # step's start to one step past this one
+            best = (prev[0], prev[1], prev[2], prev[3] + 2.0 * h, step_peak)
+        prev = (y0, y1, f0, h)
+        t += h
+        y0, y1, f0 = n0, n1, fn
+        if method == METHOD_DOPRI5:
+            h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
+    return FLIGHT_MAX_STEPS, t, nan, nan, nan, steps, rejected
+
+
+# ------------------------------------------------------------------ the mechanism kernel
+
+PARAMETERS = ("model", "k", "xi", "kappa", "R", "omega1", "l2", "tool")
+OUTPUTS = ("regime", "amplitude", "frequency_ratio", "period", "impact_speed",
+           "impact_interval", "impacts_to_converge", "acceleration_peak",
+           "restitution_critical", "n_steps", "n_events", "method_used")
+METHOD = ("integrator", "rtol", "atol", "dt", "max_impacts")
+REGIMES = ("period_1", "period_n", "quasi_periodic", "escape", "chatter", "no_impact")
+INTEGRATOR_AUTO, INTEGRATOR_CLOSED, INTEGRATOR_RK4, INTEGRATOR_DOPRI5 = 0, 1, 2, 3
+USED_CLOSED, USED_RK4, USED_DOPRI5 = 0, 1, 2
+TOOL_ROTOR_STOP = 0
+_N_DIMLESS = 10  # regime, A, n, tau1, v*, impacts, c_acc, R_crit, steps, events (+ method)
+
+
+@njit(**KERNEL_OPTIONS)
+def _critical(model, k, xi, kappa):
+    """Closed-form escape threshold on the launch speed: v_crit (P4) or 2 Omega (P-O8)."""
+    if model == MODEL_PAPER:
+        return paper_critical_speed(k, xi)
+    return 2.0 * math.sqrt(kappa * k)
+
+
+@njit(**KERNEL_OPTIONS)
+def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts, out):
+    """Steady state of the impact regime in omega1 units; returns the kernel status.
+
+    out: regime, amplitude, n, tau1 (impact interval), v* (pre-impact speed), impacts to
+    converge (or to escape), peak |psi''|, R_crit, steps, events, method used.
+    """
+    for j in range(out.shape[0]):
+        out[j] = math.nan
+    v_crit = _critical(model, k, xi, kappa)
+    r_crit = (v_crit - (1.0 + k)) / (v_crit + (1.0 + k))
+    out[7] = r_crit if r_crit > 0.0 else math.nan  # no periodic regime at any R: NaN
+    tol = 1e-12 if integrator <= INTEGRATOR_CLOSED else max(10.0 * rtol, 1e-12)
+    count, escaped = impacts_to_converge(k, r, v_crit, tol)
+    if integrator <= INTEGRATOR_CLOSED:  # the closed-form path (auto picks it here)
+        out[10] = USED_CLOSED
+        out[5] = count
+        out[8] = 0.0
+        out[9] = 0.0
+        if escaped:
+            out[0] = REGIME_ESCAPE
+            return st.ESCAPE
+        v = steady_state_speed(k, r)
+        if model == MODEL_PAPER:
+            amp = paper_amplitude(v, k, xi)
+            tau1 = paper_half_period(v, k, xi, amp)
+            acc = paper_peak_acceleration(v, k, xi, amp)
+        else:
+            amp, tau1, acc = rigid_flight(v, kappa * k)
+        out[0], out[1], out[2], out[3], out[4], out[6] = (REGIME_PERIOD_1, amp, math.pi / tau1,
+                                                          tau1, v, acc)
+        return st.OK
+    method = METHOD_RK4 if integrator == INTEGRATOR_RK4 else METHOD_DOPRI5
+    out[10] = USED_RK4 if method == METHOD_RK4 else USED_DOPRI5
+    steps = events = 0
+    v = 0.0
+    for j in range(1, int(max_impacts) + 1):
+        launch = (1.0 + k) * (1.0 + r) + r * v
+        if launch >= v_crit:  # closed-form criterion, not a horizon (H1, H2, H12)
+            out[0], out[5], out[8], out[9] = REGIME_ESCAPE, j, steps, events
+            return st.ESCAPE
+        status, tau1, v_new, amp, acc, n_ok, n_bad = integrate_flight(
+            model, launch, k, xi, kappa, method, rtol, atol, dt, 1000000)
+        steps += n_ok + n_bad
+        events += 1
+        if status == FLIGHT_ESCAPE:
+            out[0], out[5], out[8], out[9] = REGIME_ESCAPE, j, steps, events
+            return st.ESCAPE
+        if status != FLIGHT_IMPACT:
+            out[8], out[9] = steps, events
+            return st.STEP_UNDERFLOW if status == FLIGHT_UNDERFLOW else st.MAX_STEPS
+        converged = abs(v_new - v) <= tol * v_new
+        v = v_new
+        if converged or r == 0.0:
+            out[0], out[1], out[2], out[3], out[4] = (REGIME_PERIOD_1, amp, math.pi / tau1,
+                                                      tau1, v)
+            out[5], out[6], out[8], out[9] = j, acc, steps, events
+            return st.OK
+    out[8], out[9] = steps, events
+    return st.MAX_STEPS
+
+
+@njit(**KERNEL_OPTIONS)
+def pendulum_block(cases, integrator, rtol, atol, dt, max_impacts, dim, status):
+    """Dimensionless steady states for each distinct case (model, k, xi, kappa, R)."""
+    row = np.empty(dim.shape[1])
+    for c in range(cases.shape[0]):
+        status[c] = dimensionless(int(cases[c, 0]), cases[c, 1], cases[c, 2], cases[c, 3],
+                                  cases[c, 4], integrator, rtol, atol, dt, max_impacts, row)
+        for j in range(row.shape[0]):
+            dim[c, j] = row[j]
+
+
+def pendulum_run(params, method):
+    """Registry entry point: integrate once per distinct (model, k, xi, kappa, R) in the
+    block, then rescale by omega1 and l2 (omega1 is only a time scale, P-O12)."""
+    p = {name: params[i] for i, name in enumerate(PARAMETERS)}
+    kappa = np.where(np.isnan(p["kappa"]), p["xi"] / (1.0 + p["xi"]), p["kappa"])
+    keys = np.stack([p["model"], p["k"], p["xi"], kappa, p["R"]], axis=1)
+    cases, index = np.unique(keys, axis=0, return_inverse=True)
+    index = index.ravel()
+    dim = np.empty((cases.shape[0], _N_DIMLESS + 1))
+    case_status = np.empty(cases.shape[0], dtype=np.int8)
+    pendulum_block(np.ascontiguousarray(cases), int(method[0]), method[1], method[2],
+                   method[3], method[4], dim, case_status)
+    d = dim[index].T
+    w, l2, k = p["omega1"], p["l2"], p["k"]
+    out = np.empty((len(OUTPUTS), params.shape[1]))
+    out[0] = d[0]
+    out[1] = d[1]
+    out[2] = d[2]
+    out[3] = 2.0 * np.pi / (d[2] * w)  # the full relative oscillation period (Table 1's T)
+    out[4] = w * l2 * (1.0 + k + d[4])  # striker speed at impact, V = omega1 l2 (1+k+v)
+    out[5] = d[3]
+    out[6] = d[5]
+    out[7] = d[6] * w * w
+    out[8] = d[7]
+    out[9] = d[8]
+    out[10] = d[9]
+    out[11] = d[10]
+    return out, case_status[index], np.empty((0, params.shape[1], 0))
+
+
+@njit(**KERNEL_OPTIONS)
+def integrate_to(model, psi0, dpsi0, tau_end, k, xi, kappa, method, rtol, atol, dt):
+    """State (psi, psi', steps) at tau_end without events: RK4 with n = ceil(tau_end/dt)
+    equal steps, or DOPRI5 with the step controller (the last step clipped). For
+    convergence-order and work-precision measurements."""
+    y0, y1 = psi0, dpsi0
+    f0 = acceleration(model, y0, y1, k, xi, kappa)
+    if method == METHOD_RK4:
+        n = max(1, int(math.ceil(tau_end / dt - 1e-12)))
+        h = tau_end / n
+        for _ in range(n):
+            y0, y1, f0 = _rk4_step(model, y0, y1, f0, h, k, xi, kappa)
+        return y0, y1, n
+    t, h, steps = 0.0, min(0.05, tau_end), 0
+    while t < tau_end and steps < 10**7:
+        h = min(h, tau_end - t)
+        n0, n1, fn, e0, e1 = _dopri_step(model, y0, y1, f0, h, k, xi, kappa)
+        sc0 = atol + rtol * max(abs(y0), abs(n0))
+        sc1 = atol + rtol * max(abs(y1), abs(n1))
+        err = math.sqrt(0.5 * ((e0 / sc0) ** 2 + (e1 / sc1) ** 2))
+        steps += 1
+        if err <= 1.0:
+            t += h
+            y0, y1, f0 = n0, n1, fn
+        h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
+    return y0, y1, steps

@@ -1,0 +1,216 @@
+"""Rotary-pendulum impact mechanism (seed 004; dynamics.md §1): closed forms against the
+integrators, oracles P-O2..P-O8, P-O12, P-O13, hard cases H1, H2, H4, H13, measured order."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.special import ellipk as scipy_ellipk
+
+from kernels import pendulum as pd
+from sweep import spec
+from sweep.errors import UserError
+
+XI = 4.0
+# dynamics.md §1.6: the model values (A, n, max|psi''|/omega1^2) and the paper's Table 1
+MODEL = {1.0: (2.15268, 0.69967, 1.2734), 1.5: (1.91174, 1.00691, 2.2122),
+         2.0: (1.79862, 1.25931, 3.4131), 2.5: (1.72373, 1.48959, 4.9196)}
+TABLE1 = {1.0: (2.170, 0.7004), 1.5: (1.920, 1.0109), 2.0: (1.792, 1.2566), 2.5: (1.724, 1.4948)}
+# seed 004 Table 2, max angular acceleration [1/s^2] at omega1 = 20..100 (OCR "2210(" = 22100)
+TABLE2 = {1.0: (495, 2000, 4520, 8000, 12230), 1.5: (883, 2530, 7900, 14120, 22200),
+          2.0: (1350, 5470, 12350, 22100, 33930), 2.5: (2000, 8000, 17300, 31500, 49700)}
+TYPO = (1.5, 40.0)  # printed 2530, the model gives 3540: a typo for 3530
+
+
+def closed(k, v=None, xi=XI):
+    v = 1 + k if v is None else v
+    amp = pd.paper_amplitude(v, k, xi)
+    return amp, pd.paper_half_period(v, k, xi, amp), pd.paper_peak_acceleration(v, k, xi, amp)
+
+
+@pytest.mark.parametrize("k", sorted(MODEL))
+def test_closed_form_reproduces_the_reconstructed_model(k):
+    amp, tau1, acc = closed(k)
+    a_ref, n_ref, c_ref = MODEL[k]
+    assert amp == pytest.approx(a_ref, abs=5e-6)
+    assert math.pi / tau1 == pytest.approx(n_ref, abs=5e-6)
+    assert acc == pytest.approx(c_ref, abs=5e-5)
+
+
+@pytest.mark.parametrize("k", sorted(MODEL))
+def test_P_O2_O3_O4_O5_closed_form_equals_dopri5_at_tight_tolerance(k):
+    amp, tau1, acc = closed(k)
+    status, t, v_back, a_int, acc_int, steps, rejected = pd.integrate_flight(
+        pd.MODEL_PAPER, 1 + k, k, XI, 0.0, pd.METHOD_DOPRI5, 1e-12, 1e-14, 0.0, 10**6)
+    assert status == pd.FLIGHT_IMPACT
+    assert abs(a_int - amp) <= 1e-9  # P-O2
+    assert abs(t - tau1) <= 1e-9  # P-O3
+    assert acc_int == pytest.approx(acc, rel=1e-8)  # P-O4
+    assert abs(v_back - (1 + k)) <= 1e-10  # P-O5: the flight is time-reversible
+
+
+def test_P_O1_first_integral_is_conserved_along_a_dopri5_orbit():
+    """(psi'^2 + xi) M(psi) with ln M = ln(1 + xi X)/xi^2 - X/xi is constant on a flight."""
+    k, v = 2.0, 3.0
+
+    def invariant(psi, dpsi):
+        x = k * k + 1 + 2 * k * math.cos(psi)
+        return (dpsi * dpsi + XI) * math.exp(math.log1p(XI * x) / XI**2 - x / XI)
+
+    start = invariant(0.0, -v)
+    for tau in (0.3, 0.9, 1.6, 2.4):
+        psi, dpsi, _ = pd.integrate_to(pd.MODEL_PAPER, 0.0, -v, tau, k, XI, 0.8,
+                                       pd.METHOD_DOPRI5, 1e-12, 1e-14, 0.0)
+        assert invariant(psi, dpsi) == pytest.approx(start, rel=1e-10)
+        assert dpsi * dpsi == pytest.approx(pd.paper_u(psi, v, k, XI), rel=1e-9, abs=1e-12)
+
+
+def test_P_O6_affine_impact_map_fixed_point_and_contraction():
+    k, r = 2.5, 0.2
+    v_star = pd.steady_state_speed(k, r)
+    assert v_star == pytest.approx(5.25, rel=1e-15)
+    assert 1 + k + v_star == pytest.approx(2 * (1 + k) / (1 - r), rel=1e-15)  # V*/(omega1 l2)
+    count, escaped = pd.impacts_to_converge(k, r, pd.paper_critical_speed(k, XI), 1e-11)
+    assert not escaped and count == math.ceil(math.log(1e-11) / math.log(r))  # ratio R
+    assert count == 16 or count == 17  # dynamics.md: 17 impacts to 1e-11
+
+
+@pytest.mark.parametrize("k, r_crit", [(1.0, 0.061), (1.5, 0.146), (2.0, 0.221), (2.5, 0.288)])
+@pytest.mark.parametrize("integrator", [pd.INTEGRATOR_CLOSED, pd.INTEGRATOR_DOPRI5])
+def test_P_O7_escape_threshold_classifies_exactly(k, r_crit, integrator):
+    v_crit = pd.paper_critical_speed(k, XI)
+    exact = (v_crit - (1 + k)) / (v_crit + (1 + k))
+    assert exact == pytest.approx(r_crit, abs=6e-4)
+    out = np.empty(11)
+    below = pd.dimensionless(0, k, XI, 0.8, exact * (1 - 1e-6), integrator, 1e-10, 1e-12,
+                             0.0, 100000, out)
+    assert below == 0 and out[0] == pd.REGIME_PERIOD_1
+    above = pd.dimensionless(0, k, XI, 0.8, exact * (1 + 1e-6), integrator, 1e-10, 1e-12,
+                             0.0, 100000, out)
+    assert above == 5 and out[0] == pd.REGIME_ESCAPE  # status escape
+
+
+def test_P_O8_rigid_pendulum_elliptic_period_and_the_separatrix():
+    for m in (0.1, 0.5, 0.9, 0.999):
+        assert pd.ellipk(m) == pytest.approx(scipy_ellipk(m), rel=4e-16)
+    omega2 = 2.0  # kappa k = 2: launched with 1 + k = 2 from k = 1, m = 0.5
+    amp, tau1, acc = pd.rigid_flight(2.0, omega2)
+    status, t, v_back, a_int, acc_int, *_ = pd.integrate_flight(
+        pd.MODEL_RIGID, 2.0, 1.0, XI, 2.0, pd.METHOD_DOPRI5, 1e-12, 1e-14, 0.0, 10**6)
+    assert abs(t - tau1) <= 1e-9 and abs(a_int - amp) <= 1e-9
+    assert amp == pytest.approx(2 * math.asin(math.sqrt(0.5)), rel=1e-15)
+    # H1: on the separatrix (point mass, k = 1, R = 0: v^2 = 4 kappa k) the closed form
+    # decides "no return" before any integration
+    assert math.isnan(pd.rigid_flight(2.0, 1.0)[0])
+    out = np.empty(11)
+    assert pd.dimensionless(1, 1.0, XI, 1.0, 0.0, pd.INTEGRATOR_DOPRI5, 1e-10, 1e-12, 0.0,
+                            100, out) == 5 and out[8] == 0  # escape, no step taken
+
+
+def test_physical_pendulum_never_returns_after_a_plastic_impact():
+    """dynamics.md §0 finding 2: kappa = xi/(1+xi) < (1+k)^2/(4k) for every k."""
+    out = np.empty(11)
+    for k in (1.0, 1.5, 2.0, 2.5):
+        assert pd.dimensionless(1, k, XI, XI / (1 + XI), 0.0, 0, 0, 0, 0, 1, out) == 5
+        assert math.isnan(out[7])  # no R has a periodic regime
+
+
+def test_H2_near_separatrix_slowing():
+    k = 2.5
+    v_crit = pd.paper_critical_speed(k, XI)
+    expected = {1e-2: 4.31, 1e-4: 7.37, 1e-6: 10.44}
+    for delta, tau in expected.items():
+        v = v_crit * (1 - delta)
+        amp = pd.paper_amplitude(v, k, XI)
+        assert pd.paper_half_period(v, k, XI, amp) == pytest.approx(tau, abs=0.01)
+
+
+def test_H4_no_event_at_the_restart_point_and_short_flights_are_seen():
+    h = 0.1
+    # leaves the surface downward and stays below: no event, although it starts at psi = 0
+    assert pd._first_crossing(h, 0.0, -1.0, -0.1, -1.0, 0.0, True) < 0
+    # dips below and comes back within one step: the event is found inside the step
+    s = pd._first_crossing(h, 0.0, -1.0, 0.05, 2.5, 0.0, True)
+    assert 0 < s < h and abs(pd._hermite(s, h, 0.0, -1.0, 0.05, 2.5)) < 1e-14
+
+
+def test_rk4_order_measured_not_assumed():
+    """Global error of the state at a fixed time against DOPRI5 at rtol 1e-13: the fitted
+    slope of log error vs log dt is RK4's order (4), measured, not assumed."""
+    k, tau = 2.0, 2.0
+    ref = pd.integrate_to(pd.MODEL_PAPER, 0.0, -(1 + k), tau, k, XI, 0.8, pd.METHOD_DOPRI5,
+                          1e-13, 1e-15, 0.0)
+    dts = np.array([0.1, 0.05, 0.025, 0.0125])
+    errors = []
+    for dt in dts:
+        y = pd.integrate_to(pd.MODEL_PAPER, 0.0, -(1 + k), tau, k, XI, 0.8, pd.METHOD_RK4,
+                            0.0, 0.0, dt)
+        errors.append(math.hypot(y[0] - ref[0], y[1] - ref[1]))
+    order = np.polyfit(np.log(dts), np.log(errors), 1)[0]
+    assert 3.7 < order < 4.3, (order, errors)
+
+
+def test_integrators_agree_with_the_closed_form_at_random_points():
+    rng = np.random.default_rng(5)
+    out_c, out_d = np.empty(11), np.empty(11)
+    for _ in range(15):
+        k = rng.uniform(1.0, 3.0)
+        v_crit = pd.paper_critical_speed(k, XI)
+        r = rng.uniform(0, 0.9) * (v_crit - 1 - k) / (v_crit + 1 + k)
+        assert pd.dimensionless(0, k, XI, 0.8, r, 1, 0, 0, 0, 1000, out_c) == 0
+        assert pd.dimensionless(0, k, XI, 0.8, r, 3, 1e-10, 1e-12, 0, 1000, out_d) == 0
+        for j in (1, 2, 3, 4, 6):  # amplitude, n, tau1, v*, peak acceleration
+            assert out_d[j] == pytest.approx(out_c[j], rel=1e-7)
+
+
+def test_P_O13_paper_tables_within_their_bands_and_the_typo_cell():
+    for k, (a_paper, n_paper) in TABLE1.items():
+        amp, tau1, _ = closed(k)
+        assert abs(amp / a_paper - 1) <= 0.01 and abs(math.pi / tau1 / n_paper - 1) <= 0.005
+    bad = []
+    for k, row in TABLE2.items():
+        c = closed(k)[2]
+        for w, printed in zip((20.0, 40.0, 60.0, 80.0, 100.0), row):
+            if abs(c * w * w / printed - 1) > 0.05:
+                bad.append((k, w))
+    assert bad == [TYPO]
+    assert closed(1.5)[2] * 1600 == pytest.approx(3540, abs=5)
+
+
+def test_P_O12_omega1_is_a_time_scale_and_is_not_integrated_again(monkeypatch):
+    calls = []
+    real = pd.pendulum_block
+
+    def counting(cases, *args):
+        calls.append(cases.shape[0])
+        return real(cases, *args)
+
+    monkeypatch.setattr(pd, "pendulum_block", counting)
+    s = spec.parse('mechanism = "rotary_pendulum"\n[grid]\nk = [1.5, 2.5]\n'
+                   'omega1 = [20.0, 37.7, 100.0]\n[method]\nintegrator = "dopri5"')
+    from sweep.engine import Plan, run_block
+    plan = Plan(s)
+    (index, location), = list(plan.locations())
+    out = plan.split(run_block(s, location))
+    assert calls == [2]  # two (k) cases for six grid points
+    amp = out["amplitude"]
+    assert np.all(amp[:, 0] == amp[:, 2])
+    acc = out["acceleration_peak"]
+    assert acc[:, 2] / acc[:, 0] == pytest.approx(25.0, rel=1e-12)
+    period = out["period"]
+    assert period[:, 0] / period[:, 2] == pytest.approx(5.0, rel=1e-12)
+    v = out["impact_speed"]  # corrected eq. (7): V = 2 (1+k) omega1 l2 at R = 0
+    assert v[1, 0] == pytest.approx(2 * 3.5 * 20.0 * 0.04, rel=1e-12)
+
+
+@pytest.mark.parametrize("text, key", [
+    ('[fixed]\nmodel = "rotor"', "model"),
+    ('[fixed]\ntool = "lab_window"', "tool"),
+    ("[fixed]\nkappa = 0.9", "kappa"),
+    ("[fixed]\nR = 1.0", "fixed.R"),
+    ('[method]\nintegrator = "euler"', "method.integrator"),
+])
+def test_pendulum_spec_errors(text, key):
+    with pytest.raises(UserError) as err:
+        spec.parse('mechanism = "rotary_pendulum"\n[grid]\nk = [2.5]\n' + text)
+    assert key in str(err.value) and "\n" not in str(err.value)
