@@ -99,7 +99,7 @@ def paper_peak_acceleration(v, k, xi, amplitude):
         a = k * x / (1.0 + xi * x)
         return a * (paper_u(psi, v, k, xi) + xi) * abs(math.sin(psi))
 
-    n = 256
+    n = 32
     best_j, best = 0, -1.0
     for j in range(n + 1):
         val = accel(amplitude * j / n)
@@ -108,16 +108,21 @@ def paper_peak_acceleration(v, k, xi, amplitude):
     lo = amplitude * max(0, best_j - 1) / n
     hi = amplitude * min(n, best_j + 1) / n
     ratio = 0.5 * (math.sqrt(5.0) - 1.0)
-    for _ in range(100):
-        c = hi - ratio * (hi - lo)
-        d = lo + ratio * (hi - lo)
-        if accel(c) > accel(d):
-            hi = d
+    c = hi - ratio * (hi - lo)
+    d = lo + ratio * (hi - lo)
+    fc, fd = accel(c), accel(d)
+    for _ in range(100):  # golden section: one new evaluation per iteration
+        if fc > fd:
+            hi, d, fd = d, c, fc
+            c = hi - ratio * (hi - lo)
+            fc = accel(c)
         else:
-            lo = c
-        if hi - lo < 1e-15 * amplitude:
+            lo, c, fc = c, d, fd
+            d = lo + ratio * (hi - lo)
+            fd = accel(d)
+        if hi - lo < 1e-14 * amplitude:
             break
-    return max(best, accel(0.5 * (lo + hi)))
+    return max(best, fc, fd)
 
 
 # ------------------------------------------------------------------ rigid model, closed form
@@ -321,13 +326,15 @@ def _refine_peak(model, best, k, xi, kappa, method, exact):
 
 
 @njit(**KERNEL_OPTIONS)
-def integrate_flight(model, launch, k, xi, kappa, method, rtol, atol, dt, max_steps):
+def integrate_flight(model, launch, k, xi, kappa, method, rtol, atol, dt, max_steps,
+                     refine_peak=True):
     """One flight from psi = 0 with psi' = -launch < 0, to the next impact (psi back to 0,
     upward) or escape (psi reaching -pi: the pendulum goes over the top).
 
     Returns (status, tau of the event, psi' there, amplitude, peak |psi''|, steps, rejected).
     The event time is found on the step interpolant and polished by secant iterations on
-    exact partial steps from the step start (atol-limited event times, H5).
+    exact partial steps from the step start (atol-limited event times, H5). Without
+    refine_peak (transient flights) the peak is only the largest value at step ends.
     """
     t, y0, y1 = 0.0, 0.0, -launch
     f0 = acceleration(model, y0, y1, k, xi, kappa)
@@ -378,7 +385,9 @@ def integrate_flight(model, launch, k, xi, kappa, method, rtol, atol, dt, max_st
             else:
                 p0, p1, pf = _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
             status = FLIGHT_ESCAPE if event == 0 else FLIGHT_IMPACT
-            peak = _refine_peak(model, best, k, xi, kappa, method, max(exact, abs(pf)))
+            peak = max(exact, abs(pf))
+            if refine_peak:
+                peak = _refine_peak(model, best, k, xi, kappa, method, peak)
             return status, t + s, p1, -lowest, peak, steps, rejected
         # the lowest point and the peak acceleration, refined on this step's interpolant
         if y1 < 0.0 <= n1:
@@ -471,14 +480,16 @@ def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impact
     method = METHOD_RK4 if integrator == INTEGRATOR_RK4 else METHOD_DOPRI5
     out[10] = USED_RK4 if method == METHOD_RK4 else USED_DOPRI5
     steps = events = 0
+    speeds = np.zeros(4)  # pre-impact speeds v_0 = 0, v_1, v_2, v_3 from integrated flights
     v = 0.0
+    final = False
     for j in range(1, int(max_impacts) + 1):
         launch = (1.0 + k) * (1.0 + r) + r * v
         if launch >= v_crit:  # closed-form criterion, not a horizon (H1, H2, H12)
             out[0], out[5], out[8], out[9] = REGIME_ESCAPE, j, steps, events
             return st.ESCAPE
         status, tau1, v_new, amp, acc, n_ok, n_bad = integrate_flight(
-            model, launch, k, xi, kappa, method, rtol, atol, dt, 1000000)
+            model, launch, k, xi, kappa, method, rtol, atol, dt, 1000000, final or r == 0.0)
         steps += n_ok + n_bad
         events += 1
         if status == FLIGHT_ESCAPE:
@@ -487,13 +498,29 @@ def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impact
         if status != FLIGHT_IMPACT:
             out[8], out[9] = steps, events
             return st.STEP_UNDERFLOW if status == FLIGHT_UNDERFLOW else st.MAX_STEPS
-        converged = abs(v_new - v) <= tol * v_new
-        v = v_new
-        if converged or r == 0.0:
+        converged = r == 0.0 or abs(v_new - v) <= tol * v_new
+        if converged:
+            if not final:
+                final = True  # converged on a transient flight: one more, peak refined
+                v = v_new
+                continue
             out[0], out[1], out[2], out[3], out[4] = (REGIME_PERIOD_1, amp, math.pi / tau1,
-                                                      tau1, v)
-            out[5], out[6], out[8], out[9] = j, acc, steps, events
+                                                      tau1, v_new)
+            out[5], out[6], out[8], out[9] = count, acc, steps, events
             return st.OK
+        if j <= 3:
+            speeds[j] = v_new
+        if j == 3:
+            # three integrated flights fix the affine map v -> a + R v (reversible flights,
+            # H13): jump to its fixed point by Aitken's delta-squared, checked by the next
+            # flight instead of iterating to convergence
+            d1, d2 = speeds[2] - speeds[1], speeds[3] - speeds[2]
+            if d2 != d1 and abs(d1) > 0.0:
+                v_new = speeds[3] - d2 * d2 / (d2 - d1)
+                final = True  # the flight from the fixed point is expected to be the last
+        elif final:
+            final = False  # it was not: keep iterating the map
+        v = v_new
     out[8], out[9] = steps, events
     return st.MAX_STEPS
 
