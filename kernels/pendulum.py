@@ -328,19 +328,31 @@ def _refine_peak(model, best, k, xi, kappa, method, exact):
 @njit(**KERNEL_OPTIONS)
 def integrate_flight(model, launch, k, xi, kappa, method, rtol, atol, dt, max_steps,
                      refine_peak=True):
-    """One flight from psi = 0 with psi' = -launch < 0, to the next impact (psi back to 0,
-    upward) or escape (psi reaching -pi: the pendulum goes over the top).
+    """One flight from the rotor stop: psi = 0, psi' = -launch (see _flight)."""
+    return _flight(model, 0.0, -launch, 0.0, k, xi, kappa, method, rtol, atol, dt, max_steps,
+                   refine_peak)
+
+
+@njit(**KERNEL_OPTIONS)
+def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max_steps,
+            refine_peak):
+    """One flight from (psi0, dpsi0) to the next impact (psi up through ``level``) or escape
+    (psi reaching -pi: the pendulum goes over the top).
 
     Returns (status, tau of the event, psi' there, amplitude, peak |psi''|, steps, rejected).
     The event time is found on the step interpolant and polished by secant iterations on
     exact partial steps from the step start (atol-limited event times, H5). Without
     refine_peak (transient flights) the peak is only the largest value at step ends.
     """
-    t, y0, y1 = 0.0, 0.0, -launch
+    t, y0, y1 = 0.0, psi0, dpsi0
     f0 = acceleration(model, y0, y1, k, xi, kappa)
     best = (0.0, 0.0, 0.0, 0.0, 0.0)  # (y0, y1, f0, window, peak): where to refine the peak
     prev = (y0, y1, f0, 0.0)  # the start of the previous step and its length
-    h = dt if method == METHOD_RK4 else min(0.1, 0.01 / max(1.0, abs(launch)))
+    h = dt if method == METHOD_RK4 else min(0.1, 0.01 / max(1.0, abs(dpsi0)))
+    if f0 * dpsi0 < 0.0:
+        # pushed back towards the surface: the first step must end before the ballistic
+        # return 2|psi'|/|psi''|, or a short flight falls between two sign samples (H4)
+        h = min(h, 0.5 * abs(dpsi0) / abs(f0))
     steps = rejected = 0
     lowest = 0.0
     peak = abs(f0)  # largest sampled |psi''| (interpolated): only picks where to refine
@@ -364,8 +376,8 @@ def integrate_flight(model, launch, k, xi, kappa, method, rtol, atol, dt, max_st
         steps += 1
         # events on this step: escape (psi down through -pi) first, then impact (up through 0)
         for event in range(2):
-            level = -math.pi if event == 0 else 0.0
-            s = _first_crossing(h, y0, y1, n0, n1, level, event == 1)
+            at = -math.pi if event == 0 else level
+            s = _first_crossing(h, y0, y1, n0, n1, at, event == 1)
             if s < 0.0:
                 continue
             for _ in range(3):  # secant polish with exact partial steps from the step start
@@ -375,7 +387,7 @@ def integrate_flight(model, launch, k, xi, kappa, method, rtol, atol, dt, max_st
                     p0, p1, pf = _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
                 if p1 == 0.0:
                     break
-                s_new = s - (p0 - level) / p1
+                s_new = s - (p0 - at) / p1
                 if not (0.0 < s_new <= h) or abs(s_new - s) <= 1e-16 * max(1.0, t):
                     s = s_new if 0.0 < s_new <= h else s
                     break
@@ -399,8 +411,8 @@ def integrate_flight(model, launch, k, xi, kappa, method, rtol, atol, dt, max_st
                     a_hi = m2
                 else:
                     a_lo = m1
-            lowest = min(lowest, _hermite(0.5 * (a_lo + a_hi), h, y0, y1, n0, n1))
-        lowest = min(lowest, n0)
+            lowest = min(lowest, _hermite(0.5 * (a_lo + a_hi), h, y0, y1, n0, n1) - psi0)
+        lowest = min(lowest, n0 - psi0)
         step_peak = abs(fn)
         for j in range(1, 4):  # psi'' at interior points from the interpolated state
             s = h * j / 4.0
@@ -592,3 +604,38 @@ def integrate_to(model, psi0, dpsi0, tau_end, k, xi, kappa, method, rtol, atol, 
             y0, y1, f0 = n0, n1, fn
         h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
     return y0, y1, steps
+
+
+CHATTER_STUCK, CHATTER_LEAVES, CHATTER_ESCAPE, CHATTER_FAILED = 0, 1, 2, 3
+
+
+@njit(**KERNEL_OPTIONS)
+def chatter(model, psi_stop, r_stop, psi0, dpsi0, k, xi, kappa, method, rtol, atol, dt,
+            speed_eps, max_impacts):
+    """Repeated impacts on a rotor-fixed stop at psi_stop (relative restitution r_stop,
+    psi'+ = -r_stop psi'-), from (psi0, dpsi0) below the stop, with the Zeno guard (H6).
+
+    When the impact speed falls below speed_eps the flights form a geometric series: instead
+    of looping forever the guard jumps to the accumulation point
+    tau_inf = tau_j + 2 r v_j / (g (1 - r)) with g = psi'' at the stop, the ballistic tail
+    of P-O14 (the m-th later flight takes 2 r^m v_j / g), and checks that the centrifugal torque
+    presses the pendulum into the stop (it then sticks). Returns (outcome, tau_inf or the
+    time of the last event, impacts, steps).
+    """
+    t, steps, psi, dpsi = 0.0, 0, psi0, dpsi0
+    for j in range(1, max_impacts + 1):
+        status, dt_flight, v_hit, amp, acc, n_ok, n_bad = _flight(
+            model, psi, dpsi, psi_stop, k, xi, kappa, method, rtol, atol, dt, 1000000, False)
+        steps += n_ok + n_bad
+        if status == FLIGHT_ESCAPE:
+            return CHATTER_ESCAPE, t + dt_flight, j - 1, steps
+        if status != FLIGHT_IMPACT:
+            return CHATTER_FAILED, t, j - 1, steps
+        t += dt_flight
+        g = acceleration(model, psi_stop, 0.0, k, xi, kappa)  # > 0: pressed into the stop
+        if v_hit < speed_eps:
+            if not g > 0.0:
+                return CHATTER_LEAVES, t, j, steps
+            return CHATTER_STUCK, t + 2.0 * r_stop * v_hit / (g * (1.0 - r_stop)), j, steps
+        psi, dpsi = psi_stop, -r_stop * v_hit
+    return CHATTER_FAILED, t, max_impacts, steps

@@ -214,3 +214,31 @@ def test_pendulum_spec_errors(text, key):
     with pytest.raises(UserError) as err:
         spec.parse('mechanism = "rotary_pendulum"\n[grid]\nk = [2.5]\n' + text)
     assert key in str(err.value) and "\n" not in str(err.value)
+
+
+def test_H6_P_O14_zeno_chatter_on_a_rotor_fixed_stop_ends_at_the_accumulation_point():
+    """dynamics.md §1.7: rigid model, kappa k = 1, stop at psi_s = -0.3, R_s = 0.8, start at
+    rest at psi = -0.6: 71 impacts before v < 1e-7, accumulating at tau = 12.834839. The
+    guard returns there instead of looping, and the pendulum sticks to the stop."""
+    outcome, tau_inf, impacts, steps = pd.chatter(
+        pd.MODEL_RIGID, -0.3, 0.8, -0.6, 0.0, 1.0, XI, 1.0, pd.METHOD_DOPRI5, 1e-12, 1e-14,
+        0.0, 1e-7, 100000)
+    assert outcome == pd.CHATTER_STUCK and impacts == 71
+    assert tau_inf == pytest.approx(12.834839, abs=2e-6)
+    # P-O14: at v < 1e-3 the integrated tail already follows the ballistic series to 1e-2
+    early = pd.chatter(pd.MODEL_RIGID, -0.3, 0.8, -0.6, 0.0, 1.0, XI, 1.0, pd.METHOD_DOPRI5,
+                       1e-12, 1e-14, 0.0, 1e-3, 100000)
+    assert early[0] == pd.CHATTER_STUCK and early[2] < impacts
+    assert early[1] == pytest.approx(tau_inf, rel=1e-2)
+
+
+def test_H4_a_flight_shorter_than_a_step_is_not_stepped_over():
+    """A slow bounce off the stop (v = 1e-6, flight ~ 5e-6 rotor radians) is found: the first
+    step is capped by the ballistic return time."""
+    status, tau, v_back, *_ = pd._flight(pd.MODEL_RIGID, -0.3, -1e-6, -0.3, 1.0, XI, 1.0,
+                                         pd.METHOD_DOPRI5, 1e-12, 1e-14, 0.0, 10000, False)
+    g = math.sin(0.3)
+    assert status == pd.FLIGHT_IMPACT
+    # the dip is 1.7e-12 rad deep at psi ~ -0.3 (ulp 5.6e-17): the event time is resolved to
+    # ulp/(v tau) ~ 1e-5 relative, the floor that makes the Zeno guard jump analytically
+    assert tau == pytest.approx(2e-6 / g, rel=1e-4) and v_back == pytest.approx(1e-6, rel=1e-4)
