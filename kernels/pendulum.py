@@ -261,13 +261,44 @@ def _hermite(s, h, y0, d0, y1, d1):
 
 
 @njit(**KERNEL_OPTIONS)
+def _grazing_peak(h, y0, d0, y1, d1, upward):
+    """Where the interpolant turns inside the step (psi' changes sign towards the level),
+    its extremum (s, value) by ternary search; s = -1 if it does not turn (H3)."""
+    if not ((d0 > 0.0 > d1) if upward else (d0 < 0.0 < d1)):
+        return -1.0, 0.0
+    lo, hi = 0.0, h
+    for _ in range(100):
+        m1 = lo + (hi - lo) / 3.0
+        m2 = hi - (hi - lo) / 3.0
+        f1 = _hermite(m1, h, y0, d0, y1, d1)
+        f2 = _hermite(m2, h, y0, d0, y1, d1)
+        if (f1 < f2) == upward:
+            lo = m1
+        else:
+            hi = m2
+    s = 0.5 * (lo + hi)
+    return s, _hermite(s, h, y0, d0, y1, d1)
+
+
+@njit(**KERNEL_OPTIONS)
 def _first_crossing(h, y0, d0, y1, d1, level, upward):
     """First s in (0, h] where psi crosses ``level`` in the given direction, from sign
-    samples of the step interpolant (the step start itself never counts: H4). -1 if none."""
+    samples of the step interpolant (the step start itself never counts: H4), and, where
+    the interpolant turns inside the step, from its extremum: a grazing contact that lasts
+    less than the sample spacing is not stepped over (H3). -1 if none."""
+    peak_s, peak = _grazing_peak(h, y0, d0, y1, d1, upward)
     prev_s, prev = 0.0, y0 - level
-    for j in range(1, SUBSTEP_SAMPLES + 2):
-        s = h * j / (SUBSTEP_SAMPLES + 1)
-        val = (_hermite(s, h, y0, d0, y1, d1) if j <= SUBSTEP_SAMPLES else y1) - level
+    for j in range(1, SUBSTEP_SAMPLES + 3):
+        if j <= SUBSTEP_SAMPLES + 1:
+            s = h * j / (SUBSTEP_SAMPLES + 1)
+            val = (_hermite(s, h, y0, d0, y1, d1) if j <= SUBSTEP_SAMPLES else y1) - level
+            if peak_s > prev_s and peak_s < s:
+                # the extremum lies in this interval: test it first
+                pv = peak - level
+                if (prev < 0.0 <= pv) if upward else (prev > 0.0 >= pv):
+                    s, val = peak_s, pv
+        else:
+            break
         crossed = (prev < 0.0 <= val) if upward else (prev > 0.0 >= val)
         if crossed:
             lo, hi, flo = prev_s, s, prev  # Illinois (regula falsi) on the interpolant

@@ -242,3 +242,30 @@ def test_H4_a_flight_shorter_than_a_step_is_not_stepped_over():
     # the dip is 1.7e-12 rad deep at psi ~ -0.3 (ulp 5.6e-17): the event time is resolved to
     # ulp/(v tau) ~ 1e-5 relative, the floor that makes the Zeno guard jump analytically
     assert tau == pytest.approx(2e-6 / g, rel=1e-4) and v_back == pytest.approx(1e-6, rel=1e-4)
+
+
+@pytest.mark.parametrize("eps", [1e-2, 1e-4, 1e-6])
+def test_H3_grazing_contact_is_found_where_scipy_steps_over_it(eps):
+    """A small-amplitude rigid pendulum (psi'' ~ -psi, amplitude 0.01) against a stop at
+    0.01 (1 - eps): the contact lasts ~2 sqrt(2 eps) (0.0028 at eps = 1e-6). DOPRI5 at
+    rtol 1e-9 takes steps of ~0.05, much longer than that, yet resolves the 1e-8 gap; the
+    extremum check finds the contact. SciPy's DOP853 at rtol 1e-6 with an event steps over
+    it (dynamics.md H3: 0 of 3)."""
+    from scipy.integrate import solve_ivp
+
+    amp = 0.01
+    level = amp * (1 - eps)
+    status, tau, v_hit, amp_, acc_, steps, rejected = pd._flight(
+        pd.MODEL_RIGID, -amp, 0.0, level, 1.0, XI, 1.0, pd.METHOD_DOPRI5, 1e-9, 1e-12, 0.0,
+        100000, False)
+    assert status == pd.FLIGHT_IMPACT
+    assert steps < 200  # long steps: the contact is found inside one
+    assert tau == pytest.approx(math.pi - math.sqrt(2 * eps), rel=0.05)
+
+    def event(t, y):
+        return y[0] - level
+    event.direction = 1
+    sol = solve_ivp(lambda t, y: [y[1], -math.sin(y[0])], (0, 2 * math.pi), [-amp, 0.0],
+                    method="DOP853", rtol=1e-6, events=event)
+    if eps <= 1e-4:
+        assert sol.t_events[0].size == 0  # the usual sign-change detector steps over it
