@@ -9,7 +9,6 @@ measured in one process so the ratios hold when the machine's speed drifts.
 from __future__ import annotations
 
 import json
-import math
 import os
 import platform
 import sys
@@ -23,9 +22,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from kernels import crank_rocker as cr  # noqa: E402
 from kernels import status as st  # noqa: E402
+from benchmarks.timing import paired_times  # noqa: E402
 
 N = 1_000_000
-REPEATS = 5
 
 
 def make_points(n, seed=1):
@@ -116,28 +115,6 @@ def numpy_crank_rocker(p, tol):
     status[moving & (count > 1)] = st.SECOND_SPECIAL_POSITION
     status[nrs] = st.NO_REAL_SYNTHESIS
     return out, status
-
-
-def best_time(fn, repeats=REPEATS):
-    fn()  # warm-up
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
-
-
-def paired_times(a, b, repeats=11):
-    """Minimum times of a and b run in turn (A B A B ...), so drift hits both alike."""
-    a(), b()
-    ta, tb = [], []
-    for _ in range(repeats):
-        for fn, times in ((a, ta), (b, tb)):
-            t = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - t)
-    return min(ta), min(tb)
 
 
 def kernel_vs_numpy():

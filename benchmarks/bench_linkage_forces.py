@@ -16,7 +16,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.bench_crank_rocker import paired_times  # noqa: E402
+from benchmarks.timing import paired_times  # noqa: E402
 from kernels import kinetostatics as kt  # noqa: E402
 
 POINTS, ANGLES = 2000, 360

@@ -10,24 +10,14 @@ from __future__ import annotations
 import json
 import platform
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
+from benchmarks.timing import best_time  # noqa: E402
 from kernels import balancer as bl  # noqa: E402
-
-
-def best(fn, repeats=3):
-    fn()
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
 
 
 def grid(n, geometries, seed=4):
@@ -50,15 +40,15 @@ def main():
     method = np.array([0, 1e-10, 1e-9])
     bl.balancer_run(grid(10, 1), method)
     n_shared, n_own = 20000, 200
-    t_shared = best(lambda: bl.balancer_run(grid(n_shared, 1), method))
-    t_own = best(lambda: bl.balancer_run(grid(n_own, n_own), method))
+    t_shared = best_time(lambda: bl.balancer_run(grid(n_shared, 1), method))
+    t_own = best_time(lambda: bl.balancer_run(grid(n_own, n_own), method))
     a, b, g0 = bl.fourier_coefficients(3.0, 1.0, 3.5, 2.5, 1.0)
-    t_coef = best(lambda: bl.fourier_coefficients(3.0, 1.0, 3.5, 2.5, 1.0))
+    t_coef = best_time(lambda: bl.fourier_coefficients(3.0, 1.0, 3.5, 2.5, 1.0))
     out = np.empty(len(bl.OUTPUTS))
-    t_resp = best(lambda: [bl.response(a, b, g0, 1.1, 0.9, 0.02, 0, 1e-10, 1e-9, 0, out)
+    t_resp = best_time(lambda: [bl.response(a, b, g0, 1.1, 0.9, 0.02, 0, 1e-10, 1e-9, 0, out)
                            for _ in range(1000)]) / 1000
     bl.shooting(3.0, 1.0, 3.5, 2.5, 1.0, 1.1, 0.9, 0.02, g0 / 2, True, 100)
-    t_shoot = best(lambda: [bl.shooting(3.0, 1.0, 3.5, 2.5, 1.0, 1.1, 0.9, 0.02, g0 / 2, d,
+    t_shoot = best_time(lambda: [bl.shooting(3.0, 1.0, 3.5, 2.5, 1.0, 1.1, 0.9, 0.02, g0 / 2, d,
                                         4000) for d in (False, True)])
     result = {"machine": platform.node(),
               "one_geometry_points_per_s": n_shared / t_shared,

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from kernels import fourbar as fb
-from tests.conftest import GAMMA03, R03, crank_rocker_point
+from tests.conftest import GAMMA03, crank_rocker_point
 
 G2 = Fraction(169, 49)  # gamma^2 at R = 0.3, exactly
 
