@@ -129,6 +129,8 @@ def info(atlas_file):
     """Dimensions, variables with units, status counts and provenance of an atlas."""
     import json
 
+    import numpy as np
+
     from sweep.atlas import status_counts
 
     ds = _open_atlas(atlas_file)
@@ -144,6 +146,15 @@ def info(atlas_file):
     total = sum(counts.values())
     click.echo("status: " + ", ".join(f"{k} {v} ({100 * v / total:.1f}%)"
                                       for k, v in counts.items() if v))
+    for name in ds.data_vars:  # categorical outputs (e.g. regime): counts of each meaning
+        attrs = ds[name].attrs
+        if name == "status" or "flag_meanings" not in attrs:
+            continue
+        values = ds[name].values
+        parts = [f"{m} {int((values == c).sum())}" for c, m in
+                 zip(np.atleast_1d(attrs["flag_values"]), attrs["flag_meanings"].split())
+                 if (values == c).any()]
+        click.echo(f"{name}: " + ", ".join(parts))
     click.echo(f"code version: {ds.attrs.get('code_version', '?')}")
     versions = json.loads(ds.attrs.get("package_versions", "{}"))
     click.echo("packages: " + ", ".join(f"{k} {v}" for k, v in versions.items()))
