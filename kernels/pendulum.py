@@ -23,7 +23,9 @@ from kernels import KERNEL_OPTIONS
 from kernels import status as st
 
 MODEL_PAPER, MODEL_RIGID = 0, 1
-REGIME_PERIOD_1, REGIME_ESCAPE = 0, 1  # codes in the regime output (see the registry)
+#: meanings of the codes of the ``regime`` output (CF flag_meanings, in this order)
+REGIMES = ("period_1", "period_n", "quasi_periodic", "escape", "chatter", "no_impact")
+REGIME_PERIOD_1, REGIME_ESCAPE = REGIMES.index("period_1"), REGIMES.index("escape")
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(96)  # for the half-period quadrature
 
@@ -473,7 +475,6 @@ OUTPUTS = ("regime", "amplitude", "frequency_ratio", "period", "impact_speed",
            "impact_interval", "impacts_to_converge", "acceleration_peak",
            "restitution_critical", "n_steps", "n_events", "method_used")
 METHOD = ("integrator", "rtol", "atol", "dt", "max_impacts")
-REGIMES = ("period_1", "period_n", "quasi_periodic", "escape", "chatter", "no_impact")
 INTEGRATOR_AUTO, INTEGRATOR_CLOSED, INTEGRATOR_RK4, INTEGRATOR_DOPRI5 = 0, 1, 2, 3
 USED_CLOSED, USED_RK4, USED_DOPRI5 = 0, 1, 2
 TOOL_ROTOR_STOP = 0

@@ -269,3 +269,19 @@ def test_H3_grazing_contact_is_found_where_scipy_steps_over_it(eps):
                     method="DOP853", rtol=1e-6, events=event)
     if eps <= 1e-4:
         assert sol.t_events[0].size == 0  # the usual sign-change detector steps over it
+
+
+def test_regime_flags_decode_by_name_in_the_atlas(tmp_path):
+    import xarray as xr
+
+    from sweep import atlas
+
+    s = spec.parse('mechanism = "rotary_pendulum"\n[grid]\nR = [0.0, 0.35]\n[fixed]\nk = 2.5')
+    atlas.run_sweep(s, tmp_path / "p.nc", progress=False, history="test")
+    ds = xr.open_dataset(tmp_path / "p.nc")
+    meanings = ds["regime"].attrs["flag_meanings"].split()
+    decoded = [meanings[int(v)] for v in ds["regime"].values]
+    assert decoded == ["period_1", "escape"]  # R = 0.35 > R_crit(2.5) = 0.288
+    status = ds["status"].attrs["flag_meanings"].split()
+    codes = list(ds["status"].attrs["flag_values"])
+    assert [status[codes.index(v)] for v in ds["status"].values] == ["ok", "escape"]
