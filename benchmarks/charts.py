@@ -9,6 +9,10 @@
    runs after a warm-up, per steady state, one thread. The RK4 slope is fitted.
 2. Loop closure near a special position (T1 lambda2 = 2, type a): relative error of u31
    against 60-digit mpmath, for the factored form and the papers' arccos form.
+3. Failure map: RK4 time-marching on the undamped balancer over (r, steps per revolution),
+   with RK4's stability edge (dynamics.md H7).
+4. Work-precision of the balancer's steady state: Fourier over harmonic counts against RK4
+   shooting over step counts.
 """
 
 from __future__ import annotations
@@ -129,13 +133,103 @@ def loop_closure_near_node(path: Path):
     plt.close(fig)
 
 
+def balancer_failure_map(path: Path):
+    """RK4 time-marching on the undamped balancer (device, f = 1): growth of the response over
+    (r, steps per revolution), against RK4's stability edge |h lambda| = 2 sqrt 2 with
+    lambda = i sqrt(1 + 1/r^2), i.e. N = pi sqrt(1 + 1/r^2) / sqrt 2."""
+    from kernels import balancer as bl
+
+    geom = (3.0, 1.0, 3.5, 2.5)
+    a, b, g0 = bl.fourier_coefficients(*geom, 1.0)
+    rs = np.geomspace(0.02, 0.5, 22)
+    ns = np.unique(np.geomspace(12, 400, 26).astype(int))
+    growth = np.empty((len(ns), len(rs)))
+    for i, n in enumerate(ns):
+        for j, r in enumerate(rs):
+            theta, g, _ = bl.march(*geom, 1.0, 1.0, r, 0.0, g0 / 2, True, int(n), 30)
+            growth[i, j] = np.log10(max(np.max(np.abs(g)), 1e-300)) if np.all(
+                np.isfinite(g)) else 300.0
+    fig, ax = plt.subplots(figsize=(7.5, 5), constrained_layout=True)
+    mesh = ax.pcolormesh(rs, ns, np.clip(growth, -1, 8), shading="nearest", cmap="magma")
+    edge = np.pi * np.sqrt(1 + 1 / rs**2) / np.sqrt(2)
+    ax.plot(rs, edge, "c--", lw=2, label="RK4 stability edge N = pi sqrt(1+1/r^2)/sqrt 2")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("stiffness ratio r = omega0/p [-]")
+    ax.set_ylabel("RK4 steps per crank revolution [-]")
+    bar = fig.colorbar(mesh)
+    bar.set_label("log10 max |g| after 30 revolutions [rad] (8 = blown up)")
+    ax.set_title(f"Where time-marching RK4 fails: undamped balancer, f = 1\nmade on {MACHINE}",
+                 fontsize=9)
+    ax.legend(fontsize=8, loc="lower left")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def balancer_work_precision(path: Path):
+    """Steady state of the balancer (device, f = 1.1, r = 0.9, eta = 0.02): RK4 shooting over
+    step counts and the Fourier solution over harmonic counts. Error: max over a revolution
+    of |g'' - reference| / max |reference|, the reference being the Fourier series with all
+    harmonics (checked against shooting at 4000 steps to 1e-7 in the tests)."""
+    from kernels import balancer as bl
+
+    geom = (3.0, 1.0, 3.5, 2.5)
+    a, b, g0 = bl.fourier_coefficients(*geom, 1.0)
+    f, r, eta = 1.1, 0.9, 0.02
+    k = 1 + 1 / r**2
+
+    def g2_series(theta, m):
+        n = np.arange(1, m + 1)
+        d, e = k - n**2 * f**2, 2 * eta * n * f
+        an = (1 / r**2) * (d * a[1:m + 1] - e * b[1:m + 1]) / (d**2 + e**2)
+        bn = (1 / r**2) * (e * a[1:m + 1] + d * b[1:m + 1]) / (d**2 + e**2)
+        return -(np.cos(np.outer(theta, n)) @ (n**2 * an) + np.sin(np.outer(theta, n))
+                 @ (n**2 * bn))
+
+    full = int(np.nonzero(np.hypot(a, b))[0][-1])
+    grid = np.linspace(0, 2 * np.pi, 2048, endpoint=False)
+    ref = g2_series(grid, full)
+    scale = np.max(np.abs(ref))
+    out = np.empty(len(bl.OUTPUTS))
+    fourier = []
+    for m in (2, 3, 4, 6, 8, 10, 13, 16, 20, 25):
+        err = np.max(np.abs(g2_series(grid, m) - ref)) / scale
+        fourier.append((timed(lambda m=m: bl.response(a, b, g0, f, r, eta, 0, 1e-14, 1e-9, m,
+                                                     out)), err))
+    shooting = []
+    for n in (50, 100, 200, 400, 800, 1600, 3200):
+        theta, g, g2 = bl.shooting(*geom, 1.0, f, r, eta, g0 / 2, True, n)
+        err = np.max(np.abs(g2 - g2_series(theta, full))) / scale
+        shooting.append((timed(lambda n=n: bl.shooting(*geom, 1.0, f, r, eta, g0 / 2, True, n),
+                               repeats=3), err))
+    steps = np.array([50, 100, 200, 400, 800, 1600, 3200])
+    errs = np.array([e for _, e in shooting])
+    order = -np.polyfit(np.log(steps[errs > 1e-13]), np.log(errs[errs > 1e-13]), 1)[0]
+    fig, ax = plt.subplots(figsize=(7.5, 5), constrained_layout=True)
+    for name, pts, marker in (("Fourier, 2 ... 25 harmonics (all metrics)", fourier, "o"),
+                              ("RK4 shooting, 50 ... 3200 steps/rev", shooting, "s")):
+        t, e = np.array(pts).T
+        ax.loglog(t * 1e6, np.maximum(e, 1e-16), marker + "-", label=name)
+    ax.set_xlabel("time per (f, r, eta) point [µs]")
+    ax.set_ylabel("max |g'' - reference| / max |reference| [-]")
+    ax.set_title("Spring balancer (device, f = 1.1, r = 0.9, eta = 0.02): work-precision\n"
+                 f"RK4 shooting fitted order {order:.2f}; made on {MACHINE}", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main():
     docs = ROOT / "docs"
     docs.mkdir(exist_ok=True)
     order = pendulum_work_precision(docs / "work_precision_pendulum.png")
     loop_closure_near_node(docs / "loop_closure_near_node.png")
-    print(f"wrote docs/work_precision_pendulum.png (RK4 order {order:.2f}) and "
-          "docs/loop_closure_near_node.png")
+    balancer_failure_map(docs / "failure_map_balancer_rk4.png")
+    balancer_work_precision(docs / "work_precision_balancer.png")
+    print(f"wrote docs/: work_precision_pendulum.png (RK4 order {order:.2f}), "
+          "loop_closure_near_node.png, failure_map_balancer_rk4.png, "
+          "work_precision_balancer.png")
 
 
 if __name__ == "__main__":

@@ -216,3 +216,28 @@ def test_auto_harmonics_meet_the_tolerance():
                  "moment_invariant_peak_balanced", "acceleration_invariant_rigid"):
         assert out[name] == pytest.approx(ref[name], rel=1e-9)
     assert 20 <= out["harmonics_used"] <= 40
+
+
+@pytest.mark.parametrize("r", [0.03, 0.1, 0.2])
+def test_rk4_stability_edge_of_the_failure_map(r):
+    """The edge in docs/failure_map_balancer_rk4.png: time-marching RK4 on the undamped
+    device at f = 1 blows up below N = pi sqrt(1 + 1/r^2)/sqrt 2 steps per revolution
+    (|h lambda| = 2 sqrt 2) and stays bounded above it."""
+    edge = math.pi * math.sqrt(1 + 1 / r**2) / math.sqrt(2)
+    below = bl.march(*GEOM, 1.0, 1.0, r, 0.0, GAMMA0 / 2, True, int(0.9 * edge), 30)[1]
+    above = bl.march(*GEOM, 1.0, 1.0, r, 0.0, GAMMA0 / 2, True, int(math.ceil(1.15 * edge)),
+                     30)[1]
+    assert not np.all(np.isfinite(below)) or np.max(np.abs(below)) > 1e3
+    assert np.all(np.isfinite(above)) and np.max(np.abs(above)) < 10
+
+
+def test_rk4_shooting_order_measured():
+    f, r, eta = 1.1, 0.9, 0.02
+    steps = np.array([100, 200, 400, 800])
+    errors = []
+    for n in steps:
+        theta, g, g2 = bl.shooting(*GEOM, 1.0, f, r, eta, GAMMA0 / 2, True, int(n))
+        ref, ref2 = fourier_mass(theta, f, r, eta, True, GAMMA0 / 2)
+        errors.append(np.max(np.abs(g2 - ref2)))
+    order = -np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    assert 3.7 < order < 4.3, (order, errors)
