@@ -671,3 +671,62 @@ def chatter(model, psi_stop, r_stop, psi0, dpsi0, k, xi, kappa, method, rtol, at
             return CHATTER_STUCK, t + 2.0 * r_stop * v_hit / (g * (1.0 - r_stop)), j, steps
         psi, dpsi = psi_stop, -r_stop * v_hit
     return CHATTER_FAILED, t, max_impacts, steps
+
+
+# ------------------------------------------------------------------ the rotor model (P8-P10)
+# Lengths in l2, inertias in J_c (the striker's centroidal inertia), j1 = J1/J_c; state
+# (phi1', psi, psi'); a linear motor tau_m = s_m (idle - phi1'). Not yet wired to the atlas.
+
+@njit(**KERNEL_OPTIONS)
+def rotor_mass_matrix(psi, k, xi, j1):
+    """(M11, M12, M22) of T = M11 phi1'^2/2 + M12 phi1' psi' + M22 psi'^2/2 (P8)."""
+    c = math.cos(psi)
+    return j1 + 1.0 + xi * (k * k + 1.0 + 2.0 * k * c), 1.0 + xi * (1.0 + k * c), 1.0 + xi
+
+
+@njit(**KERNEL_OPTIONS)
+def rotor_accelerations(w, psi, dpsi, k, xi, j1, motor_slope, idle):
+    """(phi1'', psi'') from (P9)-(P10), solving the 2x2 mass-matrix system."""
+    m11, m12, m22 = rotor_mass_matrix(psi, k, xi, j1)
+    s = xi * k * math.sin(psi)
+    rhs1 = motor_slope * (idle - w) + s * (2.0 * w * dpsi + dpsi * dpsi)
+    rhs2 = -s * w * w
+    det = m11 * m22 - m12 * m12
+    return (m22 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det
+
+
+@njit(**KERNEL_OPTIONS)
+def rotor_impact(w, dpsi, k, xi, j1, lam, r):
+    """Generalised Newton impact at psi = 0 for the 2-DOF rotor-pendulum (dynamics.md §1.3):
+    contact Jacobian J = (k + lam, lam) (contact lam l2 from A), normal speed v_n = J q',
+    impulse P = -(1 + R) v_n / (J M^-1 J^T), q'+ = q'- + M^-1 J^T P.
+    Returns (w+, psi'+, energy lost)."""
+    m11, m12, m22 = rotor_mass_matrix(0.0, k, xi, j1)
+    det = m11 * m22 - m12 * m12
+    j_a, j_b = k + lam, lam
+    # M^-1 J^T
+    x_a = (m22 * j_a - m12 * j_b) / det
+    x_b = (m11 * j_b - m12 * j_a) / det
+    eff = j_a * x_a + j_b * x_b  # J M^-1 J^T
+    v_n = j_a * w + j_b * dpsi
+    impulse = -(1.0 + r) * v_n / eff
+    return w + x_a * impulse, dpsi + x_b * impulse, (1.0 - r * r) * v_n * v_n / (2.0 * eff)
+
+
+@njit(**KERNEL_OPTIONS)
+def rotor_integrate_to(w, psi, dpsi, tau_end, k, xi, j1, motor_slope, idle, dt):
+    """RK4 with n = ceil(tau_end/dt) equal steps for the state (phi1', psi, psi')."""
+    n = max(1, int(math.ceil(tau_end / dt - 1e-12)))
+    h = tau_end / n
+    for _ in range(n):
+        a1, b1 = rotor_accelerations(w, psi, dpsi, k, xi, j1, motor_slope, idle)
+        w2, p2, d2 = w + 0.5 * h * a1, psi + 0.5 * h * dpsi, dpsi + 0.5 * h * b1
+        a2, b2 = rotor_accelerations(w2, p2, d2, k, xi, j1, motor_slope, idle)
+        w3, p3, d3 = w + 0.5 * h * a2, psi + 0.5 * h * d2, dpsi + 0.5 * h * b2
+        a3, b3 = rotor_accelerations(w3, p3, d3, k, xi, j1, motor_slope, idle)
+        w4, p4, d4 = w + h * a3, psi + h * d3, dpsi + h * b3
+        a4, b4 = rotor_accelerations(w4, p4, d4, k, xi, j1, motor_slope, idle)
+        w += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
+        psi += h / 6.0 * (dpsi + 2.0 * d2 + 2.0 * d3 + d4)
+        dpsi += h / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+    return w, psi, dpsi

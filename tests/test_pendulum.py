@@ -285,3 +285,55 @@ def test_regime_flags_decode_by_name_in_the_atlas(tmp_path):
     status = ds["status"].attrs["flag_meanings"].split()
     codes = list(ds["status"].attrs["flag_values"])
     assert [status[codes.index(v)] for v in ds["status"].values] == ["ok", "escape"]
+
+
+def rotor_energy_momentum(w, psi, dpsi, k, xi, j1):
+    m11, m12, m22 = pd.rotor_mass_matrix(psi, k, xi, j1)
+    return (0.5 * m11 * w * w + m12 * w * dpsi + 0.5 * m22 * dpsi * dpsi,
+            m11 * w + m12 * dpsi)
+
+
+def test_P_O10_free_rotor_conserves_energy_and_angular_momentum():
+    k, xi, j1 = 2.0, 4.0, 3.0
+    state = (1.0, 0.0, -3.0)  # just after a plastic impact: psi' = -(1+k) phi1'
+    t0, h0 = rotor_energy_momentum(*state, k, xi, j1)
+    for tau in (0.5, 1.3, 2.7):
+        w, psi, dpsi = pd.rotor_integrate_to(*state, tau, k, xi, j1, 0.0, 0.0, 1e-4)
+        t, h = rotor_energy_momentum(w, psi, dpsi, k, xi, j1)
+        assert t == pytest.approx(t0, rel=1e-9) and h == pytest.approx(h0, rel=1e-9)
+
+
+def test_P_O11_generalised_impact():
+    k, xi, r = 2.5, 4.0, 0.3
+    w, dpsi = 1.0, 2.2
+    # an infinitely heavy rotor reproduces the paper's law (5) with contact at l2 (lam = 1)
+    w_plus, dpsi_plus, _ = pd.rotor_impact(w, dpsi, k, xi, 1e12, 1.0, r)
+    assert w_plus == pytest.approx(w, abs=1e-9)
+    assert dpsi_plus == pytest.approx(-(1 + k) * (1 + r) * w - r * dpsi, abs=1e-9)
+    # contact at the centre of percussion, lam = 1 + 1/xi: no rotor-speed jump, any j1
+    for j1 in (0.0, 0.3, 5.0):
+        assert pd.rotor_impact(w, dpsi, k, xi, j1, 1 + 1 / xi, r)[0] == pytest.approx(
+            w, abs=1e-12)
+    # Kelvin: the energy lost equals (1 - R^2) v_n^2 / (2 J M^-1 J^T)
+    j1 = 2.0
+    w_plus, dpsi_plus, lost = pd.rotor_impact(w, dpsi, k, xi, j1, 1.0, r)
+    before = rotor_energy_momentum(w, 0.0, dpsi, k, xi, j1)[0]
+    after = rotor_energy_momentum(w_plus, 0.0, dpsi_plus, k, xi, j1)[0]
+    assert before - after == pytest.approx(lost, rel=1e-12)
+    v_n = (k + 1) * w + dpsi
+    assert (k + 1) * w_plus + dpsi_plus == pytest.approx(-r * v_n, rel=1e-12)
+
+
+def test_rotor_model_tends_to_the_rigid_model_with_a_stiff_motor():
+    """With a heavy rotor and a steep motor law the rotor keeps its speed and psi follows
+    psi'' = -kappa k sin psi, kappa = xi/(1 + xi) (dynamics.md §1.4: 1.2e-4 at j1 = 20,
+    s_m = 1e6, tau = 1.5)."""
+    k, xi = 2.0, 4.0
+    rigid = pd.integrate_to(pd.MODEL_RIGID, 0.0, -3.0, 1.5, k, xi, xi / (1 + xi),
+                            pd.METHOD_DOPRI5, 1e-12, 1e-14, 0.0)
+    gaps = []
+    for slope in (1e2, 1e4, 1e6):
+        w, psi, dpsi = pd.rotor_integrate_to(1.0, 0.0, -3.0, 1.5, k, xi, 20.0, slope, 1.0,
+                                             min(1e-4, 0.5 / slope))
+        gaps.append(abs(psi - rigid[0]))
+    assert gaps[0] > gaps[1] > gaps[2] and gaps[2] < 1e-3
