@@ -39,6 +39,17 @@ from kernels.crank_rocker import synthesize_largest_rod  # noqa: E402
 MACHINE = f"{platform.node() or 'host'} ({platform.machine()}, 1 thread)"
 
 
+def _finish(fig, ax, path: Path, xlabel: str, ylabel: str, title: str) -> None:
+    """Labels, the machine in the title, grid, legend; save and close."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(f"{title}\nmade on {MACHINE}", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def timed(fn, repeats=7):
     fn()
     best = math.inf
@@ -78,14 +89,10 @@ def pendulum_work_precision(path: Path):
         t, e = np.array(pts).T
         ax.loglog(t * 1e6, np.maximum(e, 1e-16), marker + "-", label=name)
     ax.loglog([t_closed * 1e6], [1e-15], "k*", ms=14, label="closed form (exact to ~1e-15)")
-    ax.set_xlabel("time per steady state [µs]")
-    ax.set_ylabel("max relative error of tau1, A, v* [-]")
-    ax.set_title(f"Rotary pendulum, paper model, k = 2.5, R = 0.2: work-precision\n"
-                 f"RK4 fitted order {order:.2f}; made on {MACHINE}", fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(fig, ax, path, "time per steady state [µs]",
+            "max relative error of tau1, A, v* [-]",
+            f"Rotary pendulum, paper model, k = 2.5, R = 0.2: work-precision; "
+            f"RK4 fitted order {order:.2f}")
     return order
 
 
@@ -123,14 +130,9 @@ def loop_closure_near_node(path: Path):
     ax.loglog(dphi, np.maximum(stable, 1e-17), "o-", ms=3, label="factored form (this engine)")
     ax.loglog(dphi, np.maximum(naive, 1e-17), "s-", ms=3, label="arccos form (the papers)")
     ax.invert_xaxis()
-    ax.set_xlabel("distance to the special position |dphi1| [rad]")
-    ax.set_ylabel("relative error of u31 vs 60-digit reference [-]")
-    ax.set_title("Loop closure near a special position (seed 000 Table 1, lambda2 = 2)\n"
-                 f"made on {MACHINE}", fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(fig, ax, path, "distance to the special position |dphi1| [rad]",
+            "relative error of u31 vs 60-digit reference [-]",
+            "Loop closure near a special position (seed 000 Table 1, lambda2 = 2)")
 
 
 def balancer_failure_map(path: Path):
@@ -210,14 +212,10 @@ def balancer_work_precision(path: Path):
                               ("RK4 shooting, 50 ... 3200 steps/rev", shooting, "s")):
         t, e = np.array(pts).T
         ax.loglog(t * 1e6, np.maximum(e, 1e-16), marker + "-", label=name)
-    ax.set_xlabel("time per (f, r, eta) point [µs]")
-    ax.set_ylabel("max |g'' - reference| / max |reference| [-]")
-    ax.set_title("Spring balancer (device, f = 1.1, r = 0.9, eta = 0.02): work-precision\n"
-                 f"RK4 shooting fitted order {order:.2f}; made on {MACHINE}", fontsize=9)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    _finish(fig, ax, path, "time per (f, r, eta) point [µs]",
+            "max |g'' - reference| / max |reference| [-]",
+            "Spring balancer (device, f = 1.1, r = 0.9, eta = 0.02): work-precision; "
+            f"RK4 shooting fitted order {order:.2f}")
 
 
 def main():
