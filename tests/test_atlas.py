@@ -191,3 +191,14 @@ def test_atlas_can_be_reopened_after_another_handle_closed(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-500:]
     assert out.stdout.startswith("['a', 'b', 'c']")
+
+
+def test_resume_refuses_a_different_code_version(tmp_path, monkeypatch):
+    s = spec.parse(SPEC)
+    target = tmp_path / "a.nc"
+    monkeypatch.setattr(engine, "run_block", lambda *a: (_ for _ in ()).throw(KeyboardInterrupt))
+    with pytest.raises(KeyboardInterrupt):
+        atlas.run_sweep(s, target, chunk=50, progress=False, workers=1)
+    monkeypatch.setattr(atlas, "code_version", lambda: "9.9.9+git.other")
+    with pytest.raises(UserError, match="different code version"):
+        atlas.run_sweep(s, target, chunk=50, progress=False, resume=True)
