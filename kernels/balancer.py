@@ -404,7 +404,8 @@ def _setup(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device):
     inv_r2 = 1.0 / (r * r)
     stiff = 1.0 + inv_r2 if device else inv_r2
     const = gamma_s if device else 0.0
-    return np.array([l0, l1, l2, l3, inv_r2, sigma]), beta_min, stiff, const, 2.0 * eta * f
+    return (np.array([l0, l1, l2, l3, inv_r2, sigma]), beta_min, stiff, const,
+            2.0 * eta * f, np.mean(gam))
 
 
 @njit(**KERNEL_OPTIONS)
@@ -416,8 +417,8 @@ def shooting(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device, steps):
     resolves the fastest mode sqrt(K)/f (H7); the periodic orbit of the discrete map exists
     even where time-marching would blow up, it is then just wrong.
     """
-    geo, beta_min, stiff, const, damp = _setup(l0, l1, l2, l3, sigma, f, r, eta, gamma_s,
-                                               device)
+    geo, beta_min, stiff, const, damp, mean = _setup(l0, l1, l2, l3, sigma, f, r, eta,
+                                                     gamma_s, device)
     f2 = f * f
     h = TWO_PI / steps
     # the particular solution from 0 and the two homogeneous solutions (the columns of Phi)
@@ -454,12 +455,11 @@ def march(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device, steps, revolutions)
     """Brute-force time integration (RK4, steps per revolution) from g = a0, g' = 0 over
     ``revolutions``; returns the last revolution like ``shooting``. The slow way to a steady
     state (the transient decays like exp(-eta theta/f)), kept for the hard cases H7-H8."""
-    geo, beta_min, stiff, const, damp = _setup(l0, l1, l2, l3, sigma, f, r, eta, gamma_s,
-                                               device)
+    geo, beta_min, stiff, const, damp, mean = _setup(l0, l1, l2, l3, sigma, f, r, eta,
+                                                     gamma_s, device)
     f2 = f * f
     h = TWO_PI / steps
-    gam, gamma0 = rocker_samples(l0, l1, l2, l3, sigma, 256)
-    y0, y1 = np.mean(gam), 0.0
+    y0, y1 = mean, 0.0
     for rev in range(revolutions - 1):
         for j in range(steps):
             y0, y1 = _rk4(j * h, y0, y1, h, const, stiff, damp, f2, geo, beta_min, False)

@@ -113,12 +113,21 @@ def test_failed_run_leaves_no_atlas_but_keeps_its_finished_blocks(tmp_path, monk
         assert np.array_equal(ds[name].values, reference[name].values, equal_nan=True)
 
 
-def test_resume_refuses_a_different_spec(tmp_path, monkeypatch):
+def interrupted_run(tmp_path, monkeypatch):
+    """A run stopped at its first block: the store exists, the atlas does not."""
     s = spec.parse(SPEC)
     target = tmp_path / "a.nc"
-    monkeypatch.setattr(engine, "run_block", lambda *a: (_ for _ in ()).throw(KeyboardInterrupt))
-    with pytest.raises(KeyboardInterrupt):
-        atlas.run_sweep(s, target, chunk=50, progress=False, workers=1)
+    with monkeypatch.context() as patch:
+        patch.setattr(engine, "run_block",
+                      lambda *a: (_ for _ in ()).throw(KeyboardInterrupt))
+        with pytest.raises(KeyboardInterrupt):
+            atlas.run_sweep(s, target, chunk=50, progress=False, workers=1)
+    assert atlas.partial_dir(target).exists() and not target.exists()
+    return s, target
+
+
+def test_resume_refuses_a_different_spec(tmp_path, monkeypatch):
+    s, target = interrupted_run(tmp_path, monkeypatch)
     other = spec.parse(SPEC.replace("num = 13", "num = 14"))
     with pytest.raises(UserError, match="different spec"):
         atlas.run_sweep(other, target, chunk=50, progress=False, resume=True)
@@ -194,11 +203,7 @@ def test_atlas_can_be_reopened_after_another_handle_closed(tmp_path):
 
 
 def test_resume_refuses_a_different_code_version(tmp_path, monkeypatch):
-    s = spec.parse(SPEC)
-    target = tmp_path / "a.nc"
-    monkeypatch.setattr(engine, "run_block", lambda *a: (_ for _ in ()).throw(KeyboardInterrupt))
-    with pytest.raises(KeyboardInterrupt):
-        atlas.run_sweep(s, target, chunk=50, progress=False, workers=1)
+    s, target = interrupted_run(tmp_path, monkeypatch)
     monkeypatch.setattr(atlas, "code_version", lambda: "9.9.9+git.other")
     with pytest.raises(UserError, match="different code version"):
         atlas.run_sweep(s, target, chunk=50, progress=False, resume=True)

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from kernels import crank_rocker as k
 from sweep.errors import UserError
+from sweep.mechanisms.common import POSITIVE, assembly_branch, geometry_tol
 from sweep.registry import Mechanism, Output, Parameter, register
 
-_POS = dict(minimum=0.0, min_inclusive=False)
+_POS = POSITIVE
 
 PARAMETERS = (
     Parameter("type", "1", "impact four-bar type (a: largest rod, b: largest rocker, "
@@ -27,8 +28,7 @@ PARAMETERS = (
     Parameter("crank_length", "m", "crank length (l1)", default=0.1, **_POS),
     Parameter("omega1", "rad s-1", "crank angular velocity (omega1); its sign is the "
               "rotation direction", default=30.0, nonzero=True),
-    Parameter("sigma", "1", "assembly branch (sigma): +1, -1, or the impact branch",
-              default="impact", choices={"impact": k.SIGMA_IMPACT, 1: 1, -1: -1}),
+    assembly_branch(),
 )
 
 OUTPUTS = (
@@ -106,11 +106,11 @@ register(Mechanism(
     run=k.crank_rocker_run,
     flags=("ok", "not_assemblable", "no_real_synthesis", "wrong_branch", "nonfinite",
            "degenerate", "no_impact", "second_special_position", "no_special_position"),
-    method={"geometry_tol": Parameter(
-        "geometry_tol", "1", "relative tolerance of the change-point identities and the "
-        "full-turn test", default=1e-9, minimum=0.0, maximum=1e-3)},
+    method={"geometry_tol": geometry_tol("the full-turn test")},
     method_text="closed form: synthesis (seed 000 eqs. 10-11, linkages.md §3.1), branch "
                 "values at the node from its series expansion (linkages.md §2.4), full-turn "
                 "test (§2.5); no loop-closure sampling",
     check=_check,
 ))
+
+assert k.SIGMA_IMPACT == 0.0  # the code sweep.mechanisms.common declares

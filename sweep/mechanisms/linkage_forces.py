@@ -6,9 +6,10 @@ import math
 
 from kernels import kinetostatics as k
 from sweep.errors import UserError
+from sweep.mechanisms.common import POSITIVE, assembly_branch, geometry_tol
 from sweep.registry import Mechanism, Output, Parameter, register
 
-_POS = dict(minimum=0.0, min_inclusive=False)
+_POS = POSITIVE
 _NONNEG = dict(minimum=0.0)
 
 # defaults: the kinetostatic test mechanism of linkages.md §5.4a (seed 000 Table 1,
@@ -43,8 +44,7 @@ PARAMETERS = (
     Parameter("tilt", "rad", "inclination of the base AD to the horizontal (gamma + psi "
               "of seed 001)", default=math.radians(25.0), minimum=-math.pi, maximum=math.pi),
     Parameter("g", "m s-2", "gravitational acceleration", default=9.81, **_NONNEG),
-    Parameter("sigma", "1", "assembly branch (sigma): +1, -1, or the impact branch",
-              default="impact", choices={"impact": k.SIGMA_IMPACT, 1: 1, -1: -1}),
+    assembly_branch(),
     Parameter("external_force", "N", "external force on the rocker, across it "
               "(positive towards increasing phi3)", default=0.0),
     Parameter("external_force_normal", "N", "external force on the rocker, along D->C",
@@ -97,9 +97,7 @@ assert tuple(o.name for o in OUTPUTS) == k.OUTPUTS
 assert tuple(o.name for o in PROFILES) == k.PROFILES
 
 METHOD = {
-    "geometry_tol": Parameter("geometry_tol", "1", "relative tolerance of the change-point "
-                              "identities; such linkages are modelled as exact change points",
-                              default=1e-9, minimum=0.0, maximum=1e-3),
+    "geometry_tol": geometry_tol("the special-position window"),
     "special_window": Parameter("special_window", "rad", "half-width of the window around "
                                 "a special position excluded from peaks (delta)",
                                 default=0.01, minimum=0.0, maximum=0.5,
@@ -145,3 +143,5 @@ register(Mechanism(
     profile_dim=Parameter("crank_angle", "rad", "crank angle (phi1), from A->D"),
     profile_coordinate=lambda method: k.profile_angles(int(method["profile_points"])),
 ))
+
+assert k.SIGMA_IMPACT == 0.0  # the code sweep.mechanisms.common declares

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from kernels import pendulum as k
 from sweep.errors import UserError
+from sweep.mechanisms.common import POSITIVE
 from sweep.registry import Mechanism, Output, Parameter, register
 
-_POS = dict(minimum=0.0, min_inclusive=False)
+_POS = POSITIVE
 
 PARAMETERS = (
     Parameter("model", "1", "pendulum model: seed 004's equation (paper), the physically "

@@ -5,9 +5,10 @@ from __future__ import annotations
 import math
 
 from kernels import six_link as k
+from sweep.mechanisms.common import POSITIVE, geometry_tol
 from sweep.registry import Mechanism, Output, Parameter, register
 
-_POS = dict(minimum=0.0, min_inclusive=False)
+_POS = POSITIVE
 
 PARAMETERS = (
     Parameter("lambda2", "1", "stage 1 coupler ratio l2/l1 (lambda2)", default=1.6, **_POS),
@@ -54,9 +55,7 @@ assert tuple(o.name for o in OUTPUTS) == k.OUTPUTS
 assert tuple(o.name for o in PROFILES) == k.PROFILES
 
 METHOD = {
-    "geometry_tol": Parameter("geometry_tol", "1", "relative tolerance of the change-point "
-                              "identities and the link-length conditions", default=1e-9,
-                              minimum=0.0, maximum=1e-3),
+    "geometry_tol": geometry_tol("the link-length conditions"),
     "samples": Parameter("samples", "1", "crank angles sampled over 4 pi for the peaks",
                          default=2880, minimum=8, maximum=10**6, integer=True),
     "profile_points": Parameter("profile_points", "1", "crank angles of the rocker_angle "

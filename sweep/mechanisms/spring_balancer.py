@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from kernels import balancer as k
+from sweep.mechanisms.common import POSITIVE
 from sweep.registry import Mechanism, Output, Parameter, register
 
-_POS = dict(minimum=0.0, min_inclusive=False)
+_POS = POSITIVE
 
 PARAMETERS = (
     Parameter("lambda0", "1", "base ratio l0/l1 (lambda0)", default=3.0, **_POS),
