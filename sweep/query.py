@@ -88,10 +88,12 @@ class _Evaluator:
                 left = right
             return result
         if isinstance(node, ast.Call):
-            if (not isinstance(node.func, ast.Name) or node.func.id not in _FUNCTIONS
-                    or node.keywords or len(node.args) != 1):
-                raise UserError("where: allowed functions take one argument: "
-                                + ", ".join(_FUNCTIONS))
+            allowed = ", ".join(_FUNCTIONS)
+            if not isinstance(node.func, ast.Name) or node.func.id not in _FUNCTIONS:
+                name = node.func.id if isinstance(node.func, ast.Name) else "this call"
+                raise UserError(f"where: function {name!r} is not allowed; allowed: {allowed}")
+            if node.keywords or len(node.args) != 1:
+                raise UserError(f"where: {node.func.id} takes one argument")
             with np.errstate(all="ignore"):
                 return _FUNCTIONS[node.func.id](self._number(self.value(node.args[0])))
         raise UserError(f"where: {type(node).__name__} is not allowed in a query")
