@@ -283,6 +283,60 @@ def _grazing_peak(h, y0, d0, y1, d1, upward):
 
 
 @njit(**KERNEL_OPTIONS)
+def interpolated_event(s, t, h, y0, d0, y1, d1, level, k):
+    """The event function on a step's cubic interpolant of psi: psi - level, or, for k >= 0,
+    the lab-blade gap t + s + beta(psi) - level with beta = atan2(sin psi, k + cos psi)."""
+    p = _hermite(s, h, y0, d0, y1, d1)
+    if k < 0.0:
+        return p - level
+    return t + s + math.atan2(math.sin(p), k + math.cos(p)) - level
+
+
+@njit(**KERNEL_OPTIONS)
+def illinois(lo, hi, flo, fhi, t, h, y0, d0, y1, d1, level, k):
+    """Root of interpolated_event in [lo, hi] (values flo, fhi of opposite signs) by the
+    Illinois variant of regula falsi."""
+    side = 0
+    mid = hi
+    for _ in range(100):
+        mid = hi - fhi * (hi - lo) / (fhi - flo)
+        fm = interpolated_event(mid, t, h, y0, d0, y1, d1, level, k)
+        if (fm < 0.0) == (flo < 0.0):
+            lo, flo = mid, fm
+            if side == -1:
+                fhi *= 0.5
+            side = -1
+        else:
+            hi, fhi = mid, fm
+            if side == 1:
+                flo *= 0.5
+            side = 1
+        if hi - lo <= 1e-15 * h or fm == 0.0:
+            break
+    return mid
+
+
+@njit(**KERNEL_OPTIONS)
+def classify_period(history, count, tol, max_period):
+    """Smallest p <= max_period such that the last cycle of p states of an impact map
+    repeats the cycle before it (within tol, relative); 0 if none. history rows 0..count-1
+    are the states at successive section impacts."""
+    last = count - 1
+    for p in range(1, max_period + 1):
+        if last - 2 * p < 0:
+            return 0
+        same = True
+        for q in range(p):
+            a, b = last - q, last - q - p
+            for i in range(history.shape[1]):
+                if abs(history[a, i] - history[b, i]) > tol * max(1.0, abs(history[a, i])):
+                    same = False
+        if same:
+            return p
+    return 0
+
+
+@njit(**KERNEL_OPTIONS)
 def _first_crossing(h, y0, d0, y1, d1, level, upward):
     """First s in (0, h] where psi crosses ``level`` in the given direction, from sign
     samples of the step interpolant (the step start itself never counts: H4), and, where
@@ -303,25 +357,7 @@ def _first_crossing(h, y0, d0, y1, d1, level, upward):
             break
         crossed = (prev < 0.0 <= val) if upward else (prev > 0.0 >= val)
         if crossed:
-            lo, hi, flo = prev_s, s, prev  # Illinois (regula falsi) on the interpolant
-            fhi = val
-            side = 0
-            for _ in range(100):
-                mid = hi - fhi * (hi - lo) / (fhi - flo)
-                fm = _hermite(mid, h, y0, d0, y1, d1) - level
-                if (fm < 0.0) == (flo < 0.0):
-                    lo, flo = mid, fm
-                    if side == -1:
-                        fhi *= 0.5
-                    side = -1
-                else:
-                    hi, fhi = mid, fm
-                    if side == 1:
-                        flo *= 0.5
-                    side = 1
-                if hi - lo <= 1e-15 * h or fm == 0.0:
-                    break
-            return mid
+            return illinois(prev_s, s, prev, val, 0.0, h, y0, d0, y1, d1, level, -1.0)
         prev_s, prev = s, val
     return -1.0
 
@@ -470,15 +506,8 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
 
 # ------------------------------------------------------------------ the mechanism kernel
 
-PARAMETERS = ("model", "k", "xi", "kappa", "R", "omega1", "l2", "tool")
-OUTPUTS = ("regime", "amplitude", "frequency_ratio", "period", "impact_speed",
-           "impact_interval", "impacts_to_converge", "acceleration_peak",
-           "restitution_critical", "n_steps", "n_events", "method_used")
-METHOD = ("integrator", "rtol", "atol", "dt", "max_impacts")
 INTEGRATOR_AUTO, INTEGRATOR_CLOSED, INTEGRATOR_RK4, INTEGRATOR_DOPRI5 = 0, 1, 2, 3
 USED_CLOSED, USED_RK4, USED_DOPRI5 = 0, 1, 2
-TOOL_ROTOR_STOP = 0
-_N_DIMLESS = 10  # regime, A, n, tau1, v*, impacts, c_acc, R_crit, steps, events (+ method)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -570,47 +599,6 @@ def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impact
 
 
 @njit(**KERNEL_OPTIONS)
-def pendulum_block(cases, integrator, rtol, atol, dt, max_impacts, dim, status):
-    """Dimensionless steady states for each distinct case (model, k, xi, kappa, R)."""
-    row = np.empty(dim.shape[1])
-    for c in range(cases.shape[0]):
-        status[c] = dimensionless(int(cases[c, 0]), cases[c, 1], cases[c, 2], cases[c, 3],
-                                  cases[c, 4], integrator, rtol, atol, dt, max_impacts, row)
-        for j in range(row.shape[0]):
-            dim[c, j] = row[j]
-
-
-def pendulum_run(params, method):
-    """Registry entry point: integrate once per distinct (model, k, xi, kappa, R) in the
-    block, then rescale by omega1 and l2 (omega1 is only a time scale, P-O12)."""
-    p = {name: params[i] for i, name in enumerate(PARAMETERS)}
-    kappa = np.where(np.isnan(p["kappa"]), p["xi"] / (1.0 + p["xi"]), p["kappa"])
-    keys = np.stack([p["model"], p["k"], p["xi"], kappa, p["R"]], axis=1)
-    cases, index = np.unique(keys, axis=0, return_inverse=True)
-    index = index.ravel()
-    dim = np.empty((cases.shape[0], _N_DIMLESS + 1))
-    case_status = np.empty(cases.shape[0], dtype=np.int8)
-    pendulum_block(np.ascontiguousarray(cases), int(method[0]), method[1], method[2],
-                   method[3], method[4], dim, case_status)
-    d = dim[index].T
-    w, l2, k = p["omega1"], p["l2"], p["k"]
-    out = np.empty((len(OUTPUTS), params.shape[1]))
-    out[0] = d[0]
-    out[1] = d[1]
-    out[2] = d[2]
-    out[3] = 2.0 * np.pi / (d[2] * w)  # the full relative oscillation period (Table 1's T)
-    out[4] = w * l2 * (1.0 + k + d[4])  # striker speed at impact, V = omega1 l2 (1+k+v)
-    out[5] = d[3]
-    out[6] = d[5]
-    out[7] = d[6] * w * w
-    out[8] = d[7]
-    out[9] = d[8]
-    out[10] = d[9]
-    out[11] = d[10]
-    return out, case_status[index], np.empty((0, params.shape[1], 0))
-
-
-@njit(**KERNEL_OPTIONS)
 def integrate_to(model, psi0, dpsi0, tau_end, k, xi, kappa, method, rtol, atol, dt):
     """State (psi, psi', steps) at tau_end without events: RK4 with n = ceil(tau_end/dt)
     equal steps, or DOPRI5 with the step controller (the last step clipped). For
@@ -671,62 +659,3 @@ def chatter(model, psi_stop, r_stop, psi0, dpsi0, k, xi, kappa, method, rtol, at
             return CHATTER_STUCK, t + 2.0 * r_stop * v_hit / (g * (1.0 - r_stop)), j, steps
         psi, dpsi = psi_stop, -r_stop * v_hit
     return CHATTER_FAILED, t, max_impacts, steps
-
-
-# ------------------------------------------------------------------ the rotor model (P8-P10)
-# Lengths in l2, inertias in J_c (the striker's centroidal inertia), j1 = J1/J_c; state
-# (phi1', psi, psi'); a linear motor tau_m = s_m (idle - phi1'). Not yet wired to the atlas.
-
-@njit(**KERNEL_OPTIONS)
-def rotor_mass_matrix(psi, k, xi, j1):
-    """(M11, M12, M22) of T = M11 phi1'^2/2 + M12 phi1' psi' + M22 psi'^2/2 (P8)."""
-    c = math.cos(psi)
-    return j1 + 1.0 + xi * (k * k + 1.0 + 2.0 * k * c), 1.0 + xi * (1.0 + k * c), 1.0 + xi
-
-
-@njit(**KERNEL_OPTIONS)
-def rotor_accelerations(w, psi, dpsi, k, xi, j1, motor_slope, idle):
-    """(phi1'', psi'') from (P9)-(P10), solving the 2x2 mass-matrix system."""
-    m11, m12, m22 = rotor_mass_matrix(psi, k, xi, j1)
-    s = xi * k * math.sin(psi)
-    rhs1 = motor_slope * (idle - w) + s * (2.0 * w * dpsi + dpsi * dpsi)
-    rhs2 = -s * w * w
-    det = m11 * m22 - m12 * m12
-    return (m22 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det
-
-
-@njit(**KERNEL_OPTIONS)
-def rotor_impact(w, dpsi, k, xi, j1, lam, r):
-    """Generalised Newton impact at psi = 0 for the 2-DOF rotor-pendulum (dynamics.md §1.3):
-    contact Jacobian J = (k + lam, lam) (contact lam l2 from A), normal speed v_n = J q',
-    impulse P = -(1 + R) v_n / (J M^-1 J^T), q'+ = q'- + M^-1 J^T P.
-    Returns (w+, psi'+, energy lost)."""
-    m11, m12, m22 = rotor_mass_matrix(0.0, k, xi, j1)
-    det = m11 * m22 - m12 * m12
-    j_a, j_b = k + lam, lam
-    # M^-1 J^T
-    x_a = (m22 * j_a - m12 * j_b) / det
-    x_b = (m11 * j_b - m12 * j_a) / det
-    eff = j_a * x_a + j_b * x_b  # J M^-1 J^T
-    v_n = j_a * w + j_b * dpsi
-    impulse = -(1.0 + r) * v_n / eff
-    return w + x_a * impulse, dpsi + x_b * impulse, (1.0 - r * r) * v_n * v_n / (2.0 * eff)
-
-
-@njit(**KERNEL_OPTIONS)
-def rotor_integrate_to(w, psi, dpsi, tau_end, k, xi, j1, motor_slope, idle, dt):
-    """RK4 with n = ceil(tau_end/dt) equal steps for the state (phi1', psi, psi')."""
-    n = max(1, int(math.ceil(tau_end / dt - 1e-12)))
-    h = tau_end / n
-    for _ in range(n):
-        a1, b1 = rotor_accelerations(w, psi, dpsi, k, xi, j1, motor_slope, idle)
-        w2, p2, d2 = w + 0.5 * h * a1, psi + 0.5 * h * dpsi, dpsi + 0.5 * h * b1
-        a2, b2 = rotor_accelerations(w2, p2, d2, k, xi, j1, motor_slope, idle)
-        w3, p3, d3 = w + 0.5 * h * a2, psi + 0.5 * h * d2, dpsi + 0.5 * h * b2
-        a3, b3 = rotor_accelerations(w3, p3, d3, k, xi, j1, motor_slope, idle)
-        w4, p4, d4 = w + h * a3, psi + h * d3, dpsi + h * b3
-        a4, b4 = rotor_accelerations(w4, p4, d4, k, xi, j1, motor_slope, idle)
-        w += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4)
-        psi += h / 6.0 * (dpsi + 2.0 * d2 + 2.0 * d3 + d4)
-        dpsi += h / 6.0 * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
-    return w, psi, dpsi

@@ -246,9 +246,6 @@ def validate(raw: dict) -> Sweep:
             continue
         fixed[p.name] = p.encode(v)
         fixed_echo[p.name] = v
-    if mech.check is not None:
-        mech.check(given)  # only what the user set; the rules know the defaults
-
     method: dict[str, float] = {}
     method_echo: dict[str, Any] = {}
     for name in model.method:
@@ -263,6 +260,10 @@ def validate(raw: dict) -> Sweep:
             raise UserError(f"method.{name}: value {v!r} is not allowed; allowed: {problem}")
         method[name] = p.encode(v)
         method_echo[name] = v
+        if name in model.method:
+            given["method." + name] = {v}
+    if mech.check is not None:
+        mech.check(given)  # only what the user set; the rules know the defaults
     profile_names = [o.name for o in mech.profiles]
     profiling = bool(mech.profiles) and method.get("profile_points", 0) > 0
 

@@ -50,3 +50,19 @@ def test_boundary_check_catches_a_violation(tmp_path):
     bad = tmp_path / "bad.py"
     bad.write_text("import numpy\nfrom scipy.optimize import brentq\n")
     assert ("scipy", 2) in list(_imported_roots(bad))
+
+
+def test_numba_cache_is_keyed_on_every_kernel_source():
+    """numba reuses cached code after checking only the decorated function's own file; a
+    kernel calling into a changed module ran stale code until the cache directory was named
+    by a hash of all kernel sources."""
+    import hashlib
+
+    import numba
+
+    import kernels
+    here = Path(kernels.__file__).parent
+    digest = hashlib.sha256()
+    for path in sorted(here.glob("*.py")):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    assert numba.config.CACHE_DIR.endswith("numba-" + digest.hexdigest()[:16])

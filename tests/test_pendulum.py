@@ -8,6 +8,8 @@ import pytest
 from scipy.special import ellipk as scipy_ellipk
 
 from kernels import pendulum as pd
+from kernels import pendulum_rotor as pr
+from kernels import rotary_pendulum as kr
 from sweep import spec
 from sweep.errors import UserError
 
@@ -179,13 +181,13 @@ def test_P_O13_paper_tables_within_their_bands_and_the_typo_cell():
 
 def test_P_O12_omega1_is_a_time_scale_and_is_not_integrated_again(monkeypatch):
     calls = []
-    real = pd.pendulum_block
+    real = kr.pendulum_block
 
     def counting(cases, *args):
         calls.append(cases.shape[0])
         return real(cases, *args)
 
-    monkeypatch.setattr(pd, "pendulum_block", counting)
+    monkeypatch.setattr(kr, "pendulum_block", counting)
     s = spec.parse('mechanism = "rotary_pendulum"\n[grid]\nk = [1.5, 2.5]\n'
                    'omega1 = [20.0, 37.7, 100.0]\n[method]\nintegrator = "dopri5"')
     from sweep.engine import Plan, run_block
@@ -204,8 +206,11 @@ def test_P_O12_omega1_is_a_time_scale_and_is_not_integrated_again(monkeypatch):
 
 
 @pytest.mark.parametrize("text, key", [
-    ('[fixed]\nmodel = "rotor"', "model"),
-    ('[fixed]\ntool = "lab_window"', "tool"),
+    ('[fixed]\nmodel = "rotor"\ntool = "lab_window"', "tool"),
+    ('[fixed]\ntool_window = 0.3', "tool_window"),
+    ('[fixed]\ntool = "lab_window"\ntool_window = 2.0', "fixed.tool_window"),
+    ('[fixed]\nmotor_slope = 3.0', "motor_slope"),
+    ('[fixed]\nmodel = "rotor"\n[method]\nintegrator = "closed_form"', "method.integrator"),
     ("[fixed]\nkappa = 0.9", "kappa"),
     ("[fixed]\nR = 1.0", "fixed.R"),
     ('[method]\nintegrator = "euler"', "method.integrator"),
@@ -288,7 +293,7 @@ def test_regime_flags_decode_by_name_in_the_atlas(tmp_path):
 
 
 def rotor_energy_momentum(w, psi, dpsi, k, xi, j1):
-    m11, m12, m22 = pd.rotor_mass_matrix(psi, k, xi, j1)
+    m11, m12, m22 = pr.rotor_mass_matrix(psi, k, xi, j1)
     return (0.5 * m11 * w * w + m12 * w * dpsi + 0.5 * m22 * dpsi * dpsi,
             m11 * w + m12 * dpsi)
 
@@ -298,7 +303,7 @@ def test_P_O10_free_rotor_conserves_energy_and_angular_momentum():
     state = (1.0, 0.0, -3.0)  # just after a plastic impact: psi' = -(1+k) phi1'
     t0, h0 = rotor_energy_momentum(*state, k, xi, j1)
     for tau in (0.5, 1.3, 2.7):
-        w, psi, dpsi = pd.rotor_integrate_to(*state, tau, k, xi, j1, 0.0, 0.0, 1e-4)
+        w, psi, dpsi = pr.rotor_integrate_to(*state, tau, k, xi, j1, 0.0, 0.0, 1e-4)
         t, h = rotor_energy_momentum(w, psi, dpsi, k, xi, j1)
         assert t == pytest.approx(t0, rel=1e-9) and h == pytest.approx(h0, rel=1e-9)
 
@@ -307,16 +312,16 @@ def test_P_O11_generalised_impact():
     k, xi, r = 2.5, 4.0, 0.3
     w, dpsi = 1.0, 2.2
     # an infinitely heavy rotor reproduces the paper's law (5) with contact at l2 (lam = 1)
-    w_plus, dpsi_plus, _ = pd.rotor_impact(w, dpsi, k, xi, 1e12, 1.0, r)
+    w_plus, dpsi_plus, _ = pr.rotor_impact(w, dpsi, k, xi, 1e12, 1.0, r)
     assert w_plus == pytest.approx(w, abs=1e-9)
     assert dpsi_plus == pytest.approx(-(1 + k) * (1 + r) * w - r * dpsi, abs=1e-9)
     # contact at the centre of percussion, lam = 1 + 1/xi: no rotor-speed jump, any j1
     for j1 in (0.0, 0.3, 5.0):
-        assert pd.rotor_impact(w, dpsi, k, xi, j1, 1 + 1 / xi, r)[0] == pytest.approx(
+        assert pr.rotor_impact(w, dpsi, k, xi, j1, 1 + 1 / xi, r)[0] == pytest.approx(
             w, abs=1e-12)
     # Kelvin: the energy lost equals (1 - R^2) v_n^2 / (2 J M^-1 J^T)
     j1 = 2.0
-    w_plus, dpsi_plus, lost = pd.rotor_impact(w, dpsi, k, xi, j1, 1.0, r)
+    w_plus, dpsi_plus, lost = pr.rotor_impact(w, dpsi, k, xi, j1, 1.0, r)
     before = rotor_energy_momentum(w, 0.0, dpsi, k, xi, j1)[0]
     after = rotor_energy_momentum(w_plus, 0.0, dpsi_plus, k, xi, j1)[0]
     assert before - after == pytest.approx(lost, rel=1e-12)
@@ -333,7 +338,7 @@ def test_rotor_model_tends_to_the_rigid_model_with_a_stiff_motor():
                             pd.METHOD_DOPRI5, 1e-12, 1e-14, 0.0)
     gaps = []
     for slope in (1e2, 1e4, 1e6):
-        w, psi, dpsi = pd.rotor_integrate_to(1.0, 0.0, -3.0, 1.5, k, xi, 20.0, slope, 1.0,
+        w, psi, dpsi = pr.rotor_integrate_to(1.0, 0.0, -3.0, 1.5, k, xi, 20.0, slope, 1.0,
                                              min(1e-4, 0.5 / slope))
         gaps.append(abs(psi - rigid[0]))
     assert gaps[0] > gaps[1] > gaps[2] and gaps[2] < 1e-3

@@ -1,0 +1,375 @@
+"""The rotor model (P8-P10, §1.3 impact) and the lab-fixed blade (§1.7, H11) of the
+rotary-pendulum mechanism, each against an independent SciPy implementation (DOP853 at
+rtol = atol = 1e-12, its own mass matrix and impact law, its own slide ODE)."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from kernels import pendulum as pd
+from kernels import pendulum_lab as pl
+from kernels import rotary_pendulum as kr
+
+XI = 4.0
+REG = {name: code for code, name in enumerate(pd.REGIMES)}
+TIGHT = dict(method="DOP853", rtol=1e-12, atol=1e-12)
+
+
+def case(model=0, k=2.5, xi=XI, kappa=None, r=0.0, tool=0, window=0.2, j1=100.0, slope=100.0,
+         idle=1.0):
+    kappa = xi / (1 + xi) if kappa is None else kappa
+    return np.array([model, k, xi, kappa, r, tool, window, j1, slope, idle], float)
+
+
+def steady(c, integrator=pd.INTEGRATOR_DOPRI5, rtol=1e-11, atol=1e-13, dt=0.002, impacts=1000):
+    row = np.empty(kr.N_ROW)
+    code = kr.steady_case(c, integrator, rtol, atol, dt, impacts, row)
+    return code, row
+
+
+# ---------------------------------------------------------------------------- rotor model
+
+def rotor_reference(k, xi, kappa, r, j1, slope, idle, impacts):
+    """Impact-to-impact iteration of P8-P10 with SciPy; returns the last flight's
+    (amplitude, flight time, rotor angle, pre-impact (phi1', psi'))."""
+    lam = kappa * (1 + 1 / xi)
+    kc = k * lam  # l1 over the distance to the centre of mass
+
+    def mass(psi):
+        c = math.cos(psi)
+        return np.array([[j1 + 1 + xi * (kc * kc + 1 + 2 * kc * c), 1 + xi * (1 + kc * c)],
+                         [1 + xi * (1 + kc * c), 1 + xi]])
+
+    def rhs(t, y):
+        phi1, w, psi, dpsi = y
+        s = xi * kc * math.sin(psi)
+        acc = np.linalg.solve(mass(psi), [slope * (idle - w) + s * (2 * w * dpsi + dpsi ** 2),
+                                          -s * w * w])
+        return [w, acc[0], dpsi, acc[1]]
+
+    def hit(t, y):
+        return y[2]
+    hit.terminal, hit.direction = True, 1.0
+
+    def over(t, y):
+        return y[2] + math.pi
+    over.terminal, over.direction = True, -1.0
+
+    def turn(t, y):  # the lowest point: psi' up through 0
+        return y[3]
+    turn.direction = 1.0
+
+    jac = np.array([kc + lam, lam])
+    w, v = idle, 0.0
+    for _ in range(impacts):
+        m_inv_jt = np.linalg.solve(mass(0.0), jac)
+        impulse = -(1 + r) * (jac @ [w, v]) / (jac @ m_inv_jt)
+        w, v = np.array([w, v]) + m_inv_jt * impulse
+        sol = solve_ivp(rhs, (0, 1e3), [0.0, w, 0.0, v], events=(hit, over, turn), **TIGHT)
+        if sol.t_events[1].size:
+            return None
+        y = sol.y_events[0][0]
+        amp = -sol.y_events[2][:, 2].min()
+        w, v = y[1], y[3]
+        last = (amp, sol.t_events[0][0], y[0], w, v)
+    return last
+
+
+@pytest.mark.parametrize("j1, slope, r", [(20.0, 2.0, 0.02), (10.0, 3.0, 0.0), (30.0, 5.0, 0.05)])
+def test_rotor_steady_state_matches_scipy(j1, slope, r):
+    """A light rotor on a soft motor: the rotor speed drops at every impact and recovers."""
+    k, kappa = 1.0, 1.2  # contact outboard of the centre of percussion: the pendulum returns
+    code, row = steady(case(model=kr.MODEL_ROTOR, k=k, kappa=kappa, r=r, j1=j1, slope=slope))
+    assert code == 0 and row[0] == REG["period_1"]
+    amp, tau, angle, w, v = rotor_reference(k, XI, kappa, r, j1, slope, 1.0, 60)
+    assert row[1] == pytest.approx(amp, rel=1e-8)
+    assert row[2] == pytest.approx(math.pi / tau, rel=1e-8)
+    assert row[3] == pytest.approx(angle, rel=1e-8)
+    assert row[4] == pytest.approx((1 + k) * w + v, rel=1e-8)
+    assert row[11] == pytest.approx(angle / tau, rel=1e-8)
+    assert row[11] < 0.7  # the motor sags: far from the constant-speed models
+
+
+def test_a_rotor_thrown_back_by_the_impact_is_flagged_degenerate():
+    """A light rotor hit outboard of the centre of percussion reverses: the pendulum does not
+    leave the stop, and the rotor-stop idealisation does not apply."""
+    code, row = steady(case(model=kr.MODEL_ROTOR, k=1.0, kappa=1.2, j1=5.0, slope=2.0))
+    assert code == 13 and np.isnan(row[1])
+
+
+def test_rotor_model_tends_to_the_rigid_model_as_inertia_and_motor_grow():
+    k, kappa = 1.0, 1.2
+    _, rigid = steady(case(model=pd.MODEL_RIGID, k=k, kappa=kappa), pd.INTEGRATOR_CLOSED)
+    gaps = []
+    for size in (1e2, 1e4, 1e6):
+        code, row = steady(case(model=kr.MODEL_ROTOR, k=k, kappa=kappa, j1=size, slope=size))
+        assert code == 0
+        gaps.append(max(abs(row[j] - rigid[j]) / abs(rigid[j]) for j in (1, 2, 3, 4)))
+    # first order in 1/size: two decades of size, two decades of gap
+    assert 50 < gaps[0] / gaps[1] < 200 and 50 < gaps[1] / gaps[2] < 200
+    assert gaps[2] < 3e-5
+
+
+@pytest.mark.parametrize("j1", [4.0, 16.0, 64.0, 1000.0])
+def test_rotor_with_contact_at_the_striker_escapes_as_dynamics_md_finds(j1):
+    """§1.4(c): with contact at the striker's centre (kappa = xi/(1+xi)) the pendulum goes
+    over the top after a plastic impact on a free rotor; k = 2.5 escapes. (Lighter rotors
+    are thrown back by the impact itself: degenerate, tested above.)"""
+    code, row = steady(case(model=kr.MODEL_ROTOR, k=2.5, j1=j1, slope=0.0))
+    assert code == 5 and row[0] == REG["escape"]
+
+
+# ---------------------------------------------------------------------------- lab blade
+
+class LabReference:
+    """The lab-blade hybrid system with SciPy: flights by DOP853 with terminal events on the
+    gap G = tau + beta(psi) at the blade faces, restarted after each pass; slides by
+    integrating the constraint ODE psi' = -1/h(psi) with events on the pressing and the edge.
+    """
+
+    def __init__(self, model, k, kappa, r, window, xi=XI):
+        self.model, self.k, self.kappa, self.r, self.w, self.xi = model, k, kappa, r, window, xi
+        self.accumulations = 0
+        self.contacts = 0
+
+    def acc(self, psi, dpsi):
+        k = self.k
+        if self.model == pd.MODEL_PAPER:
+            x = k * k + 1 + 2 * k * math.cos(psi)
+            return -k * x / (1 + self.xi * x) * (dpsi ** 2 + self.xi) * math.sin(psi)
+        return -self.kappa * k * math.sin(psi)
+
+    def beta(self, psi):
+        return math.atan2(math.sin(psi), self.k + math.cos(psi))
+
+    def h(self, psi):
+        """dbeta/dpsi."""
+        k = self.k
+        return (1 + k * math.cos(psi)) / (k * k + 1 + 2 * k * math.cos(psi))
+
+    def gap_acc(self, psi, dpsi):
+        """G'' of the free motion by central differences of G' along the flow."""
+        e = 1e-5
+
+        def gdot(p, d):
+            return 1 + self.h(p) * d
+        dd = self.acc(psi, dpsi)
+        return (gdot(psi + e * dpsi, dpsi + e * dd) - gdot(psi - e * dpsi, dpsi - e * dd)) / (2 * e)
+
+    def pressing(self, psi, side):
+        """side * G''_free on the face, where psi' = -1/h."""
+        return side * self.gap_acc(psi, -1.0 / self.h(psi))
+
+    def slide(self, t, psi, level, side):
+        def ode(tau, y):
+            return [-1.0 / self.h(y[0])]
+
+        def release(tau, y):
+            return self.pressing(y[0], side)
+        release.terminal, release.direction = True, -1.0
+
+        def edge(tau, y):
+            return y[0] + self.w
+        edge.terminal, edge.direction = True, -1.0
+        sol = solve_ivp(ode, (t, t + 100), [psi], events=(release, edge), **TIGHT)
+        released = sol.t_events[0].size > 0
+        te = sol.t_events[0][0] if released else sol.t_events[1][0]
+        p = sol.y_events[0][0][0] if released else -self.w
+        return released, te, p, -1.0 / self.h(p)
+
+    def run(self, sections, horizon=200 * math.pi):
+        t, psi, dpsi, level, side, gdot = 0.0, 0.0, 0.0, 0.0, 1.0, 1.0
+        flight, phases, speeds = 1.0, [], []
+        while len(phases) < sections:
+            if flight >= pl.SECTION_MIN_FLIGHT:
+                phases.append(t % (2 * math.pi))
+                speeds.append(math.sqrt(self.k ** 2 + 1 + 2 * self.k * math.cos(psi)) * gdot)
+            zeno = abs(gdot) < pl.SPEED_EPS
+            if zeno and self.r > 0:
+                # accumulation point of the ballistic chatter series, then on the face
+                self.accumulations += 1
+                t += 2 * self.r * abs(gdot) / (abs(self.gap_acc(psi, dpsi)) * (1 - self.r))
+                psi = brentq(lambda p: t + self.beta(p) - level, psi - 0.5, psi + 0.5,
+                             xtol=1e-15)
+            if self.r == 0 or zeno:
+                now = self.pressing(psi, side)
+                starts = now > 0 if abs(now) > 1e-9 else self.pressing(psi - 1e-6, side) > 0
+                if starts:
+                    released, t, psi, dpsi = self.slide(t, psi, level, side)
+                    if not released:
+                        level, side = (level, 0.0) if side > 0 else (level - 2 * math.pi, 0.0)
+                else:
+                    dpsi = -1.0 / self.h(psi)
+            else:
+                dpsi = (-self.r * gdot - 1) / self.h(psi)
+            lower = level - 2 * math.pi if side > 0 else level
+            t0 = t
+            while True:
+                up = lambda tau, y, L=lower + 2 * math.pi: tau + self.beta(y[0]) - L  # noqa
+                dn = lambda tau, y, L=lower: tau + self.beta(y[0]) - L  # noqa
+                over = lambda tau, y: abs(y[0]) - math.pi  # noqa
+                up.terminal, up.direction = True, 1.0
+                dn.terminal, dn.direction = True, -1.0
+                over.terminal, over.direction = True, 1.0
+                g1, g2 = 1 + self.h(psi) * dpsi, self.gap_acc(psi, dpsi)
+                # a bounce pulled straight back must not fit inside SciPy's first step (H3)
+                first = 0.25 * abs(g1 / g2) if g1 * g2 < 0 else None
+                sol = solve_ivp(lambda tau, y: [y[1], self.acc(y[0], y[1])],
+                                (t, t0 + horizon), [psi, dpsi], events=(up, dn, over),
+                                first_step=first, **TIGHT)
+                if sol.t_events[2].size:
+                    return phases, speeds, "escape"
+                hits = [(sol.t_events[i][0], i, sol.y_events[i][0]) for i in (0, 1)
+                        if sol.t_events[i].size]
+                if not hits:
+                    return phases, speeds, "no_impact"
+                t, which, y = min(hits, key=lambda e: e[0])
+                psi, dpsi = y
+                face = lower + 2 * math.pi if which == 0 else lower
+                if abs(psi) <= self.w:
+                    level, side = face, (1.0 if which == 0 else -1.0)
+                    self.contacts += 1
+                    break
+                lower = face if which == 0 else lower - 2 * math.pi  # passed inside
+            flight = t - t0
+            gdot = 1 + self.h(psi) * dpsi
+        return phases, speeds, "running"
+
+
+def lab_log(c, sections, rtol=1e-11):
+    """The kernel's section impacts: (rotor angle mod 2 pi, psi) per row."""
+    row = np.empty(kr.N_ROW)
+    log = np.full((sections, 2), np.nan)
+    code = pl.lab_steady(int(c[0]), c[1], c[2], c[3], c[4], c[6], 1, rtol, rtol * 1e-2, 0.002,
+                         sections - 1, kr.LAB_HORIZON, np.arange(6.0), row, log)
+    return code, row, log
+
+
+@pytest.mark.parametrize("model, k, kappa, window", [
+    (pd.MODEL_PAPER, 2.5, 0.8, 0.2),   # slides off the blade edge: once per turn
+    (pd.MODEL_RIGID, 1.0, 1.2, 0.2),   # 30 and 13 passes inside the blade between impacts
+    (pd.MODEL_RIGID, 1.0, 1.2, 0.45),
+])
+def test_lab_blade_impact_sequence_matches_scipy(model, k, kappa, window):
+    c = case(model=model, k=k, kappa=kappa, tool=kr.TOOL_LAB_WINDOW, window=window)
+    ref_phases, ref_speeds, state = LabReference(model, k, kappa, 0.0, window).run(6)
+    code, row, log = lab_log(c, 6)
+    phases = log[:, 0]
+    n = min(len(ref_phases), int(np.sum(np.isfinite(phases))))
+    assert n >= 3
+    np.testing.assert_allclose(phases[:n], ref_phases[:n], atol=1e-7)
+    code, row = steady(c)
+    assert code == 0 and row[0] in (REG["period_1"], REG["period_n"])
+    assert row[4] == pytest.approx(ref_speeds[-1], rel=1e-7) or row[0] == REG["period_n"]
+
+
+def test_lab_blade_once_per_turn_after_sliding_off_its_edge():
+    """Paper model, k = 2.5, R = 0: after the plastic impact the striker rides the blade
+    and slides off its inner edge in the same state every time: period 1, one impact per
+    rotor turn, and close to the rotor-stop speed 2 (1+k) = 7 (it meets the blade at
+    psi != 0)."""
+    code, row = steady(case(tool=kr.TOOL_LAB_WINDOW, window=0.2))
+    assert code == 0 and row[0] == REG["period_1"]
+    assert row[3] == pytest.approx(2 * math.pi, rel=1e-9)
+    assert row[4] == pytest.approx(7.0, rel=0.02)
+
+
+def test_H11_border_collision_regime_changes_where_the_impact_meets_the_blade_edge():
+    """The steady regime on the blade changes discontinuously with the blade's reach (H11):
+    the impact interval jumps between neighbouring reaches. Bisected to 1e-10, each jump
+    sits where an impact of the steady cycle meets the blade's edge (|psi| = reach), a
+    border collision, and SciPy agrees on the section impacts on both sides."""
+    c = case(model=pd.MODEL_RIGID, k=1.0, kappa=1.2, tool=kr.TOOL_LAB_WINDOW)
+    windows = np.linspace(0.12, 0.3, 10)
+    intervals = []
+    for w in windows:
+        c[6] = w
+        intervals.append(steady(c)[1][3])
+    jumps = np.flatnonzero(np.abs(np.diff(intervals)) > 1.0)
+    assert jumps.size >= 3  # the map is discontinuous in the blade reach, repeatedly
+    for jump in jumps[:2]:
+        lo, hi = windows[jump], windows[jump + 1]
+        for _ in range(34):
+            mid = 0.5 * (lo + hi)
+            c[6] = mid
+            if abs(steady(c)[1][3] - intervals[jump]) < 1e-6:
+                lo = mid
+            else:
+                hi = mid
+        edge = []
+        for w in (lo, hi):
+            c[6] = w
+            code, row, log = lab_log(c, 12)
+            psi = log[np.isfinite(log[:, 1]), 1]
+            edge.append(np.min(np.abs(np.abs(psi) - w)))
+        assert min(edge) < 1e-8  # on one side an impact lands on the blade's edge
+        # 1e-5 away from the border (where 1e-10 no longer decides) SciPy agrees
+        for w in (lo - 1e-5, hi + 1e-5):
+            c[6] = w
+            code, row, log = lab_log(c, 5)
+            ref_phases, _, _ = LabReference(pd.MODEL_RIGID, 1.0, 1.2, 0.0, w).run(5)
+            n = int(np.sum(np.isfinite(log[:, 0])))
+            np.testing.assert_allclose(log[:n, 0], ref_phases[:n], atol=1e-6)
+
+
+@pytest.mark.parametrize("model, k, kappa, r, window", [
+    (pd.MODEL_RIGID, 1.443, 24.92, 0.38, 0.847),
+    (pd.MODEL_RIGID, 1.008, 22.64, 0.267, 0.754),
+])
+def test_lab_blade_chatter_accumulates_and_ends_as_scipy_does(model, k, kappa, r, window):
+    """R > 0 on a stiff pendulum (large kappa): after an impact the striker bounces, the
+    rotor carries it back into the blade and it chatters; the Zeno guard ends the sequence
+    at its accumulation point (H6) and the striker slides. SciPy with an event at every
+    bounce (its first step capped by the ballistic return, else it steps over the bounce:
+    H3/H4) reaches the same section impacts."""
+    c = case(model=model, k=k, kappa=kappa, r=r, tool=kr.TOOL_LAB_WINDOW, window=window)
+    ref = LabReference(model, k, kappa, r, window)
+    ref_phases, _, state = ref.run(6)
+    assert ref.accumulations >= 1 and ref.contacts >= 10  # it did chatter
+    code, row, log = lab_log(c, 6)
+    np.testing.assert_allclose(log[:, 0], ref_phases, atol=1e-6)
+    code, row = steady(c)  # and the whole run ends, with a regime
+    assert code == 0 and row[0] in REG.values()
+
+
+@pytest.mark.parametrize("k, kappa, r, window, period", [
+    (0.926, 25.32, 0.363, 1.463, 3),
+    (1.767, 13.12, 0.128, 1.45, 2),
+])
+def test_lab_blade_steady_chatter_regime_matches_scipy(k, kappa, r, window, period):
+    """Steady states whose every cycle contains a chatter sequence ending at its
+    accumulation point (found by a random scan: 17 of 400 blade cases). The kernel says
+    `chatter` with the cycle's impact interval; SciPy repeats the same section impacts."""
+    c = case(model=pd.MODEL_RIGID, k=k, kappa=kappa, r=r, tool=kr.TOOL_LAB_WINDOW,
+             window=window)
+    code, row = steady(c)
+    assert code == 0 and row[0] == REG["chatter"]
+    ref = LabReference(pd.MODEL_RIGID, k, kappa, r, window)
+    ref_phases, _, _ = ref.run(2 + 3 * period)
+    assert ref.accumulations >= 2
+    tail = np.array(ref_phases[-period:]), np.array(ref_phases[-2 * period:-period])
+    np.testing.assert_allclose(*tail, atol=1e-7)  # SciPy's sections repeat with the period
+    code, _, log = lab_log(c, 2 + 3 * period)
+    n = int(np.sum(np.isfinite(log[:, 0])))
+    np.testing.assert_allclose(log[:n, 0], ref_phases[:n], atol=1e-6)
+    assert row[3] == pytest.approx(2 * math.pi * round(row[3] * period / (2 * math.pi))
+                                   / period, rel=1e-9)  # whole turns per cycle: phase-locked
+
+
+def test_lab_window_through_the_atlas(tmp_path):
+    import xarray as xr
+
+    from sweep import atlas, spec
+    s = spec.parse('mechanism = "rotary_pendulum"\n[fixed]\ntool = "lab_window"\n'
+                   'model = "rigid"\nk = 1.0\nkappa = 1.2\n[grid]\n'
+                   'tool_window = [0.2, 0.45]\nomega1 = [20.0, 40.0]')
+    atlas.run_sweep(s, tmp_path / "lab.nc", progress=False, history="test")
+    ds = xr.open_dataset(tmp_path / "lab.nc")
+    assert ds["impact_interval"].attrs["units"] == "rad"
+    speed = ds["impact_speed"].values
+    np.testing.assert_allclose(speed[:, 1], 2.0 * speed[:, 0], rtol=1e-12)  # omega1 scale
+    assert ds["method_used"].attrs["flag_meanings"].split()[int(ds["method_used"][0, 0])] \
+        == "dopri5"
