@@ -254,12 +254,59 @@ def _rk4_step(model, y0, y1, f0, h, k, xi, kappa):
 
 
 @njit(**KERNEL_OPTIONS)
+def attempt_step(model, y0, y1, f0, h, k, xi, kappa, method, rtol, atol):
+    """One RK4 step, or one DOPRI5 step with its error norm (RMS of the embedded error
+    over atol + rtol |y| per component; > 1 means reject): (psi, psi', psi'', error)."""
+    if method == METHOD_DOPRI5:
+        n0, n1, fn, e0, e1 = _dopri_step(model, y0, y1, f0, h, k, xi, kappa)
+        sc0 = atol + rtol * max(abs(y0), abs(n0))
+        sc1 = atol + rtol * max(abs(y1), abs(n1))
+        return n0, n1, fn, math.sqrt(0.5 * ((e0 / sc0) ** 2 + (e1 / sc1) ** 2))
+    n0, n1, fn = _rk4_step(model, y0, y1, f0, h, k, xi, kappa)
+    return n0, n1, fn, 0.0
+
+
+@njit(**KERNEL_OPTIONS)
 def _hermite(s, h, y0, d0, y1, d1):
     """Cubic Hermite interpolant of psi on a step, at s in [0, h] (psi' at the ends = d)."""
     t = s / h
     t2, t3 = t * t, t * t * t
     return ((2 * t3 - 3 * t2 + 1) * y0 + (t3 - 2 * t2 + t) * h * d0
             + (-2 * t3 + 3 * t2) * y1 + (t3 - t2) * h * d1)
+
+
+@njit(**KERNEL_OPTIONS)
+def hermite_slope(s, h, y0, d0, y1, d1):
+    """Derivative of the cubic Hermite interpolant at s in [0, h]."""
+    t = s / h
+    return ((6 * t * t - 6 * t) * y0 / h + (3 * t * t - 4 * t + 1) * d0
+            + (-6 * t * t + 6 * t) * y1 / h + (3 * t * t - 2 * t) * d1)
+
+
+@njit(**KERNEL_OPTIONS)
+def turning_value(h, y0, d0, y1, d1):
+    """psi at the turning point of the step's interpolant (psi' = d0 and d1 at the ends of
+    opposite signs), by bisection on the interpolant's slope."""
+    lo, hi = 0.0, h
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        if (hermite_slope(mid, h, y0, d0, y1, d1) < 0.0) == (d0 < 0.0):
+            lo = mid
+        else:
+            hi = mid
+    return _hermite(0.5 * (lo + hi), h, y0, d0, y1, d1)
+
+
+@njit(**KERNEL_OPTIONS)
+def sampled_peak(model, h, y0, d0, y1, d1, f1, k, xi, kappa):
+    """Largest |psi''| at a step's end and at three interior points of its interpolant:
+    it only says which step to refine the peak in."""
+    peak = abs(f1)
+    for j in range(1, 4):
+        s = h * j / 4.0
+        peak = max(peak, abs(acceleration(model, _hermite(s, h, y0, d0, y1, d1),
+                                          hermite_slope(s, h, y0, d0, y1, d1), k, xi, kappa)))
+    return peak
 
 
 @njit(**KERNEL_OPTIONS)
@@ -428,20 +475,13 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
     exact = abs(f0)  # largest |psi''| at step ends, where the state is the method's own
     nan = math.nan
     while steps + rejected < max_steps:
-        if method == METHOD_DOPRI5:
-            n0, n1, fn, e0, e1 = _dopri_step(model, y0, y1, f0, h, k, xi, kappa)
-            sc0 = atol + rtol * max(abs(y0), abs(n0))
-            sc1 = atol + rtol * max(abs(y1), abs(n1))
-            err = math.sqrt(0.5 * ((e0 / sc0) ** 2 + (e1 / sc1) ** 2))
-            if err > 1.0:
-                rejected += 1
-                h *= max(0.2, 0.9 * err ** -0.2)
-                if h < 1e-14 * max(1.0, t):
-                    return FLIGHT_UNDERFLOW, t, nan, nan, nan, steps, rejected
-                continue
-        else:
-            n0, n1, fn = _rk4_step(model, y0, y1, f0, h, k, xi, kappa)
-            err = 0.0
+        n0, n1, fn, err = attempt_step(model, y0, y1, f0, h, k, xi, kappa, method, rtol, atol)
+        if err > 1.0:
+            rejected += 1
+            h *= max(0.2, 0.9 * err ** -0.2)
+            if h < 1e-14 * max(1.0, t):
+                return FLIGHT_UNDERFLOW, t, nan, nan, nan, steps, rejected
+            continue
         steps += 1
         # events on this step: escape (psi down through -pi) first, then impact (up through 0)
         for event in range(2):
@@ -472,24 +512,9 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
             return status, t + s, p1, -lowest, peak, steps, rejected
         # the lowest point and the peak acceleration, refined on this step's interpolant
         if y1 < 0.0 <= n1:
-            a_lo, a_hi = 0.0, h
-            for _ in range(80):
-                m1 = a_lo + (a_hi - a_lo) / 3.0
-                m2 = a_hi - (a_hi - a_lo) / 3.0
-                if _hermite(m1, h, y0, y1, n0, n1) < _hermite(m2, h, y0, y1, n0, n1):
-                    a_hi = m2
-                else:
-                    a_lo = m1
-            lowest = min(lowest, _hermite(0.5 * (a_lo + a_hi), h, y0, y1, n0, n1) - psi0)
+            lowest = min(lowest, turning_value(h, y0, y1, n0, n1) - psi0)
         lowest = min(lowest, n0 - psi0)
-        step_peak = abs(fn)
-        for j in range(1, 4):  # psi'' at interior points from the interpolated state
-            s = h * j / 4.0
-            p = _hermite(s, h, y0, y1, n0, n1)
-            tt = s / h  # derivative of the Hermite cubic
-            dp = ((6 * tt * tt - 6 * tt) * y0 / h + (3 * tt * tt - 4 * tt + 1) * y1
-                  + (-6 * tt * tt + 6 * tt) * n0 / h + (3 * tt * tt - 2 * tt) * n1)
-            step_peak = max(step_peak, abs(acceleration(model, p, dp, k, xi, kappa)))
+        step_peak = sampled_peak(model, h, y0, y1, n0, n1, fn, k, xi, kappa)
         exact = max(exact, abs(fn))
         if step_peak > peak:
             peak = step_peak
@@ -614,10 +639,8 @@ def integrate_to(model, psi0, dpsi0, tau_end, k, xi, kappa, method, rtol, atol, 
     t, h, steps = 0.0, min(0.05, tau_end), 0
     while t < tau_end and steps < 10**7:
         h = min(h, tau_end - t)
-        n0, n1, fn, e0, e1 = _dopri_step(model, y0, y1, f0, h, k, xi, kappa)
-        sc0 = atol + rtol * max(abs(y0), abs(n0))
-        sc1 = atol + rtol * max(abs(y1), abs(n1))
-        err = math.sqrt(0.5 * ((e0 / sc0) ** 2 + (e1 / sc1) ** 2))
+        n0, n1, fn, err = attempt_step(model, y0, y1, f0, h, k, xi, kappa, METHOD_DOPRI5,
+                                       rtol, atol)
         steps += 1
         if err <= 1.0:
             t += h

@@ -22,9 +22,9 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels.pendulum import (METHOD_DOPRI5, SUBSTEP_SAMPLES, _dopri_step, _hermite,
-                              _refine_peak, _rk4_step, acceleration, classify_period,
-                              illinois, interpolated_event)
+from kernels.pendulum import (METHOD_DOPRI5, SUBSTEP_SAMPLES, _hermite, _refine_peak,
+                              acceleration, attempt_step, classify_period, hermite_slope,
+                              illinois, interpolated_event, sampled_peak, turning_value)
 
 LAB_CONTACT, LAB_ESCAPE, LAB_NO_IMPACT, LAB_MAX_STEPS, LAB_UNDERFLOW = 0, 1, 2, 3, 4
 SPEED_EPS = 1e-7  # Zeno guard: contact speeds G' below this accumulate (H6)
@@ -59,16 +59,9 @@ def gap_acceleration(model, psi, dpsi, k, xi, kappa):
 
 
 @njit(**KERNEL_OPTIONS)
-def _hermite_slope(s, h, y0, d0, y1, d1):
-    t = s / h
-    return ((6 * t * t - 6 * t) * y0 / h + (3 * t * t - 4 * t + 1) * d0
-            + (-6 * t * t + 6 * t) * y1 / h + (3 * t * t - 2 * t) * d1)
-
-
-@njit(**KERNEL_OPTIONS)
 def _gap_rate_on_step(s, h, y0, d0, y1, d1, k):
     p = _hermite(s, h, y0, d0, y1, d1)
-    return 1.0 + h_ratio(p, k) * _hermite_slope(s, h, y0, d0, y1, d1)
+    return 1.0 + h_ratio(p, k) * hermite_slope(s, h, y0, d0, y1, d1)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -107,14 +100,6 @@ def _gap_crossing(t, h, y0, d0, y1, d1, k, level, upward):
 
 
 @njit(**KERNEL_OPTIONS)
-def _partial(model, y0, y1, f0, s, k, xi, kappa, method):
-    if method == METHOD_DOPRI5:
-        p0, p1, pf, e0, e1 = _dopri_step(model, y0, y1, f0, s, k, xi, kappa)
-        return p0, p1, pf
-    return _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
-
-
-@njit(**KERNEL_OPTIONS)
 def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol, atol, dt,
                max_steps, horizon):
     """Free flight between the blade faces at G = lower and G = lower + 2 pi, to the next
@@ -143,21 +128,14 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
     while steps + rejected < max_steps:
         if t - t0 > horizon:
             return (LAB_NO_IMPACT, t, y0, y1, nan, 0.0, passes, amp, peak, steps, rejected)
-        if method == METHOD_DOPRI5:
-            n0, n1, fn, e0, e1 = _dopri_step(model, y0, y1, f0, h, k, xi, kappa)
-            sc0 = atol + rtol * max(abs(y0), abs(n0))
-            sc1 = atol + rtol * max(abs(y1), abs(n1))
-            err = math.sqrt(0.5 * ((e0 / sc0) ** 2 + (e1 / sc1) ** 2))
-            if err > 1.0:
-                rejected += 1
-                h *= max(0.2, 0.9 * err ** -0.2)
-                if h < 1e-14 * max(1.0, t):
-                    return (LAB_UNDERFLOW, t, y0, y1, nan, 0.0, passes, amp, peak, steps,
-                            rejected)
-                continue
-        else:
-            n0, n1, fn = _rk4_step(model, y0, y1, f0, h, k, xi, kappa)
-            err = 0.0
+        n0, n1, fn, err = attempt_step(model, y0, y1, f0, h, k, xi, kappa, method, rtol, atol)
+        if err > 1.0:
+            rejected += 1
+            h *= max(0.2, 0.9 * err ** -0.2)
+            if h < 1e-14 * max(1.0, t):
+                return (LAB_UNDERFLOW, t, y0, y1, nan, 0.0, passes, amp, peak, steps,
+                        rejected)
+            continue
         steps += 1
         # escape: |psi| through pi (relative rotation), located on the interpolant
         if abs(n0) >= math.pi:
@@ -179,7 +157,8 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
             level = lower + 2.0 * math.pi if up else lower
             s = s_up if up else s_dn
             for _ in range(4):  # Newton on exact partial steps: t + s + beta(psi(s)) = level
-                p0, p1, pf = _partial(model, y0, y1, f0, s, k, xi, kappa, method)
+                p0, p1, pf, _ = attempt_step(model, y0, y1, f0, s, k, xi, kappa, method,
+                                             rtol, atol)
                 rate = 1.0 + h_ratio(p0, k) * p1
                 if rate == 0.0:
                     break
@@ -187,7 +166,8 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
                 if not (0.0 < s_new <= h) or abs(s_new - s) <= 1e-16 * max(1.0, t):
                     break
                 s = s_new
-            p0, p1, pf = _partial(model, y0, y1, f0, s, k, xi, kappa, method)
+            p0, p1, pf, _ = attempt_step(model, y0, y1, f0, s, k, xi, kappa, method,
+                                             rtol, atol)
             if abs(p0) <= window:
                 peak = max(exact, abs(pf))
                 peak = _refine_peak(model, best, k, xi, kappa, method, peak)
@@ -202,20 +182,8 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
             continue
         amp = max(amp, abs(n0))
         if (y1 < 0.0) != (n1 < 0.0):  # a turning point inside the step
-            lo, hi = 0.0, h
-            for _ in range(60):
-                m1, m2 = lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0
-                if abs(_hermite(m1, h, y0, y1, n0, n1)) > abs(_hermite(m2, h, y0, y1, n0, n1)):
-                    hi = m2
-                else:
-                    lo = m1
-            amp = max(amp, abs(_hermite(0.5 * (lo + hi), h, y0, y1, n0, n1)))
-        step_peak = abs(fn)
-        for j in range(1, 4):
-            s = h * j / 4.0
-            step_peak = max(step_peak, abs(acceleration(
-                model, _hermite(s, h, y0, y1, n0, n1), _hermite_slope(s, h, y0, y1, n0, n1),
-                k, xi, kappa)))
+            amp = max(amp, abs(turning_value(h, y0, y1, n0, n1)))
+        step_peak = sampled_peak(model, h, y0, y1, n0, n1, fn, k, xi, kappa)
         exact = max(exact, abs(fn))
         if step_peak > peak:
             peak = step_peak
