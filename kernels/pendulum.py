@@ -276,6 +276,27 @@ def _hermite(s, h, y0, d0, y1, d1):
 
 
 @njit(**KERNEL_OPTIONS)
+def initial_step(method, dt, speed, rtol):
+    """First step: dt for RK4; for DOPRI5 rtol^(1/5) of the time to move a radian, the
+    step an order-5 method keeps at that tolerance (fewer rejections while ramping up)."""
+    if method != METHOD_DOPRI5:
+        return dt
+    return min(0.1, max(rtol, 1e-14) ** 0.2 / max(1.0, abs(speed)))
+
+
+@njit(**KERNEL_OPTIONS)
+def next_step(h, err, after_reject, err_prev=1.0):
+    """Step-size control of DOPRI5: the PI controller 0.9 err^-0.17 err_prev^0.04 (Hairer's
+    DOPRI5 with beta = 0.04; it damps the accept/reject see-saw where the step must keep
+    shrinking), within [0.2, 5]; after a rejection only 0.9 err^(-1/5) and no growth
+    (Hairer-Norsett-Wanner II.4)."""
+    if after_reject or err > 1.0:
+        return h * min(1.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
+    factor = 0.9 * max(err, 1e-10) ** -0.17 * max(err_prev, 1e-4) ** 0.04
+    return h * min(5.0, max(0.2, factor))
+
+
+@njit(**KERNEL_OPTIONS)
 def hermite_slope(s, h, y0, d0, y1, d1):
     """Derivative of the cubic Hermite interpolant at s in [0, h]."""
     t = s / h
@@ -295,18 +316,6 @@ def turning_value(h, y0, d0, y1, d1):
         else:
             hi = mid
     return _hermite(0.5 * (lo + hi), h, y0, d0, y1, d1)
-
-
-@njit(**KERNEL_OPTIONS)
-def sampled_peak(model, h, y0, d0, y1, d1, f1, k, xi, kappa):
-    """Largest |psi''| at a step's end and at three interior points of its interpolant:
-    it only says which step to refine the peak in."""
-    peak = abs(f1)
-    for j in range(1, 4):
-        s = h * j / 4.0
-        peak = max(peak, abs(acceleration(model, _hermite(s, h, y0, d0, y1, d1),
-                                          hermite_slope(s, h, y0, d0, y1, d1), k, xi, kappa)))
-    return peak
 
 
 @njit(**KERNEL_OPTIONS)
@@ -389,6 +398,11 @@ def _first_crossing(h, y0, d0, y1, d1, level, upward):
     samples of the step interpolant (the step start itself never counts: H4), and, where
     the interpolant turns inside the step, from its extremum: a grazing contact that lasts
     less than the sample spacing is not stepped over (H3). -1 if none."""
+    # the interpolant stays within 4/27 h (|d0| + |d1|) of the chord: far from the level,
+    # nothing can cross (skips the samples on almost every step)
+    reach = 4.0 / 27.0 * h * (abs(d0) + abs(d1))
+    if (max(y0, y1) + reach < level) if upward else (min(y0, y1) - reach > level):
+        return -1.0
     peak_s, peak = _grazing_peak(h, y0, d0, y1, d1, upward)
     prev_s, prev = 0.0, y0 - level
     for j in range(1, SUBSTEP_SAMPLES + 3):
@@ -427,18 +441,24 @@ def _refine_peak(model, best, k, xi, kappa, method, exact):
             p0, p1, pf = _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
         return abs(pf)
 
+    # golden section, one new evaluation per iteration; a location error d costs
+    # O(d^2) in the peak value, so 1e-7 of the window is round-off in the value
     lo, hi = 0.0, h
     ratio = 0.5 * (math.sqrt(5.0) - 1.0)
+    c, d = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
+    fc, fd = accel_at(c), accel_at(d)
     for _ in range(60):
-        c = hi - ratio * (hi - lo)
-        d = lo + ratio * (hi - lo)
-        if accel_at(c) > accel_at(d):
-            hi = d
+        if fc > fd:
+            hi, d, fd = d, c, fc
+            c = hi - ratio * (hi - lo)
+            fc = accel_at(c)
         else:
-            lo = c
-        if hi - lo <= 1e-13 * h:
+            lo, c, fc = c, d, fd
+            d = lo + ratio * (hi - lo)
+            fd = accel_at(d)
+        if hi - lo <= 1e-7 * h:
             break
-    return max(exact, accel_at(0.5 * (lo + hi)))
+    return max(exact, fc, fd)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -464,21 +484,23 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
     f0 = acceleration(model, y0, y1, k, xi, kappa)
     best = (0.0, 0.0, 0.0, 0.0, 0.0)  # (y0, y1, f0, window, peak): where to refine the peak
     prev = (y0, y1, f0, 0.0)  # the start of the previous step and its length
-    h = dt if method == METHOD_RK4 else min(0.1, 0.01 / max(1.0, abs(dpsi0)))
+    h = initial_step(method, dt, dpsi0, rtol)
     if f0 * dpsi0 < 0.0:
         # pushed back towards the surface: the first step must end before the ballistic
         # return 2|psi'|/|psi''|, or a short flight falls between two sign samples (H4)
         h = min(h, 0.5 * abs(dpsi0) / abs(f0))
     steps = rejected = 0
     lowest = 0.0
-    peak = abs(f0)  # largest sampled |psi''| (interpolated): only picks where to refine
-    exact = abs(f0)  # largest |psi''| at step ends, where the state is the method's own
+    peak = abs(f0)  # largest |psi''| at step ends: picks where to refine
     nan = math.nan
+    after_reject = False
+    err_prev = 1.0
     while steps + rejected < max_steps:
         n0, n1, fn, err = attempt_step(model, y0, y1, f0, h, k, xi, kappa, method, rtol, atol)
         if err > 1.0:
             rejected += 1
-            h *= max(0.2, 0.9 * err ** -0.2)
+            h = next_step(h, err, True)
+            after_reject = True
             if h < 1e-14 * max(1.0, t):
                 return FLIGHT_UNDERFLOW, t, nan, nan, nan, steps, rejected
             continue
@@ -489,11 +511,9 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
             s = _first_crossing(h, y0, y1, n0, n1, at, event == 1)
             if s < 0.0:
                 continue
-            for _ in range(3):  # secant polish with exact partial steps from the step start
-                if method == METHOD_DOPRI5:
-                    p0, p1, pf, q0, q1 = _dopri_step(model, y0, y1, f0, s, k, xi, kappa)
-                else:
-                    p0, p1, pf = _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
+            for _ in range(3):  # Newton polish with exact partial steps from the step start
+                p0, p1, pf, _ = attempt_step(model, y0, y1, f0, s, k, xi, kappa, method, rtol,
+                                             atol)
                 if p1 == 0.0:
                     break
                 s_new = s - (p0 - at) / p1
@@ -501,12 +521,9 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
                     s = s_new if 0.0 < s_new <= h else s
                     break
                 s = s_new
-            if method == METHOD_DOPRI5:
-                p0, p1, pf, q0, q1 = _dopri_step(model, y0, y1, f0, s, k, xi, kappa)
-            else:
-                p0, p1, pf = _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
+            p0, p1, pf, _ = attempt_step(model, y0, y1, f0, s, k, xi, kappa, method, rtol, atol)
             status = FLIGHT_ESCAPE if event == 0 else FLIGHT_IMPACT
-            peak = max(exact, abs(pf))
+            peak = max(peak, abs(pf))
             if refine_peak:
                 peak = _refine_peak(model, best, k, xi, kappa, method, peak)
             return status, t + s, p1, -lowest, peak, steps, rejected
@@ -514,18 +531,18 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
         if y1 < 0.0 <= n1:
             lowest = min(lowest, turning_value(h, y0, y1, n0, n1) - psi0)
         lowest = min(lowest, n0 - psi0)
-        step_peak = sampled_peak(model, h, y0, y1, n0, n1, fn, k, xi, kappa)
-        exact = max(exact, abs(fn))
-        if step_peak > peak:
-            peak = step_peak
-            # the maximum lies within a step of the best sample: search from the previous
-            # step's start to one step past this one
-            best = (prev[0], prev[1], prev[2], prev[3] + 2.0 * h, step_peak)
+        if abs(fn) > peak:
+            peak = abs(fn)
+            # a smooth maximum lies within a step of the best step end: search from the
+            # previous step's start to one step past this one
+            best = (prev[0], prev[1], prev[2], prev[3] + 2.0 * h, peak)
         prev = (y0, y1, f0, h)
         t += h
         y0, y1, f0 = n0, n1, fn
         if method == METHOD_DOPRI5:
-            h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
+            h = next_step(h, err, after_reject, err_prev)
+            err_prev = err
+        after_reject = False
     return FLIGHT_MAX_STEPS, t, nan, nan, nan, steps, rejected
 
 
@@ -578,7 +595,7 @@ def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impact
     method = METHOD_RK4 if integrator == INTEGRATOR_RK4 else METHOD_DOPRI5
     out[10] = USED_RK4 if method == METHOD_RK4 else USED_DOPRI5
     steps = events = 0
-    speeds = np.zeros(4)  # pre-impact speeds v_0 = 0, v_1, v_2, v_3 from integrated flights
+    speeds = np.zeros(3)  # pre-impact speeds v_0 = 0 (from rest), v_1, v_2 integrated
     v = 0.0
     final = False
     for j in range(1, int(max_impacts) + 1):
@@ -598,7 +615,7 @@ def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impact
             return st.STEP_UNDERFLOW if status == FLIGHT_UNDERFLOW else st.MAX_STEPS
         converged = r == 0.0 or abs(v_new - v) <= tol * v_new
         if converged:
-            if not final:
+            if not final and r != 0.0:
                 final = True  # converged on a transient flight: one more, peak refined
                 v = v_new
                 continue
@@ -606,15 +623,15 @@ def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impact
                                                       tau1, v_new)
             out[5], out[6], out[8], out[9] = count, acc, steps, events
             return st.OK
-        if j <= 3:
+        if j <= 2:
             speeds[j] = v_new
-        if j == 3:
-            # three integrated flights fix the affine map v -> a + R v (reversible flights,
-            # H13): jump to its fixed point by Aitken's delta-squared, checked by the next
-            # flight instead of iterating to convergence
-            d1, d2 = speeds[2] - speeds[1], speeds[3] - speeds[2]
+        if j == 2:
+            # v_0 = 0 and two integrated flights fix the affine map v -> a + R v (reversible
+            # flights, H13): jump to its fixed point by Aitken's delta-squared, checked by
+            # the next flight instead of iterating to convergence
+            d1, d2 = speeds[1] - speeds[0], speeds[2] - speeds[1]
             if d2 != d1 and abs(d1) > 0.0:
-                v_new = speeds[3] - d2 * d2 / (d2 - d1)
+                v_new = speeds[2] - d2 * d2 / (d2 - d1)
                 final = True  # the flight from the fixed point is expected to be the last
         elif final:
             final = False  # it was not: keep iterating the map
@@ -645,7 +662,7 @@ def integrate_to(model, psi0, dpsi0, tau_end, k, xi, kappa, method, rtol, atol, 
         if err <= 1.0:
             t += h
             y0, y1, f0 = n0, n1, fn
-        h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
+        h = next_step(h, err, err > 1.0)
     return y0, y1, steps
 
 

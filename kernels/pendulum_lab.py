@@ -24,7 +24,8 @@ from numba import njit
 from kernels import KERNEL_OPTIONS
 from kernels.pendulum import (METHOD_DOPRI5, SUBSTEP_SAMPLES, _hermite, _refine_peak,
                               acceleration, attempt_step, classify_period, hermite_slope,
-                              illinois, interpolated_event, sampled_peak, turning_value)
+                              illinois, initial_step, interpolated_event, next_step,
+                              turning_value)
 
 LAB_CONTACT, LAB_ESCAPE, LAB_NO_IMPACT, LAB_MAX_STEPS, LAB_UNDERFLOW = 0, 1, 2, 3, 4
 SPEED_EPS = 1e-7  # Zeno guard: contact speeds G' below this accumulate (H6)
@@ -112,7 +113,7 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
     nan = math.nan
     t, y0, y1 = t0, psi0, dpsi0
     f0 = acceleration(model, y0, y1, k, xi, kappa)
-    h = dt if method != METHOD_DOPRI5 else min(0.1, 0.01 / max(1.0, abs(dpsi0)))
+    h = initial_step(method, dt, dpsi0, rtol)
     g1 = 1.0 + h_ratio(y0, k) * y1
     g2 = gap_acceleration(model, y0, y1, k, xi, kappa)
     if g1 * g2 < 0.0:
@@ -122,7 +123,8 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
     steps = rejected = passes = 0
     amp = abs(y0)
     peak = abs(f0)
-    exact = abs(f0)
+    after_reject = False
+    err_prev = 1.0
     best = (y0, y1, f0, 0.0, abs(f0))
     prev = (y0, y1, f0, 0.0)
     while steps + rejected < max_steps:
@@ -131,7 +133,8 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
         n0, n1, fn, err = attempt_step(model, y0, y1, f0, h, k, xi, kappa, method, rtol, atol)
         if err > 1.0:
             rejected += 1
-            h *= max(0.2, 0.9 * err ** -0.2)
+            h = next_step(h, err, True)
+            after_reject = True
             if h < 1e-14 * max(1.0, t):
                 return (LAB_UNDERFLOW, t, y0, y1, nan, 0.0, passes, amp, peak, steps,
                         rejected)
@@ -169,7 +172,7 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
             p0, p1, pf, _ = attempt_step(model, y0, y1, f0, s, k, xi, kappa, method,
                                              rtol, atol)
             if abs(p0) <= window:
-                peak = max(exact, abs(pf))
+                peak = max(peak, abs(pf))
                 peak = _refine_peak(model, best, k, xi, kappa, method, peak)
                 amp = max(amp, abs(p0))
                 return (LAB_CONTACT, t + s, p0, p1, level, 1.0 if up else -1.0, passes,
@@ -183,16 +186,16 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
         amp = max(amp, abs(n0))
         if (y1 < 0.0) != (n1 < 0.0):  # a turning point inside the step
             amp = max(amp, abs(turning_value(h, y0, y1, n0, n1)))
-        step_peak = sampled_peak(model, h, y0, y1, n0, n1, fn, k, xi, kappa)
-        exact = max(exact, abs(fn))
-        if step_peak > peak:
-            peak = step_peak
-            best = (prev[0], prev[1], prev[2], prev[3] + 2.0 * h, step_peak)
+        if abs(fn) > peak:
+            peak = abs(fn)
+            best = (prev[0], prev[1], prev[2], prev[3] + 2.0 * h, peak)
         prev = (y0, y1, f0, h)
         t += h
         y0, y1, f0 = n0, n1, fn
         if method == METHOD_DOPRI5:
-            h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
+            h = next_step(h, err, after_reject, err_prev)
+            err_prev = err
+        after_reject = False
     return (LAB_MAX_STEPS, t, y0, y1, nan, 0.0, passes, amp, peak, steps, rejected)
 
 

@@ -64,6 +64,37 @@ def pendulum_block(cases, integrator, rtol, atol, dt, max_impacts, rows, status)
             rows[c, j] = row[j]
 
 
+@njit(**KERNEL_OPTIONS)
+def row_hashes(keys):
+    """A 64-bit hash of each row's bit patterns (FNV-1a over the words, splitmix64 finish);
+    -0.0 counts as 0.0."""
+    out = np.empty(keys.shape[0], dtype=np.uint64)
+    for i in range(keys.shape[0]):
+        h = np.uint64(14695981039346656037)
+        for j in range(keys.shape[1]):
+            word = np.array([keys[i, j] + 0.0]).view(np.uint64)[0]
+            h = (h ^ word) * np.uint64(1099511628211)
+        h ^= h >> np.uint64(30)
+        h *= np.uint64(0xBF58476D1CE4E5B9)
+        h ^= h >> np.uint64(27)
+        h *= np.uint64(0x94D049BB133111EB)
+        h ^= h >> np.uint64(31)
+        out[i] = h
+    return out
+
+
+def distinct_rows(keys):
+    """(distinct rows, index of each row's distinct row): a 1-D unique on row hashes, checked
+    row by row (np.unique(axis=0) sorts structured rows and cost 85 % of a closed-form
+    block); a hash collision falls back to the exact sort."""
+    _, first, inverse = np.unique(row_hashes(keys), return_index=True, return_inverse=True)
+    cases = keys[first]
+    same = (cases[inverse] == keys) | (np.isnan(cases[inverse]) & np.isnan(keys))
+    if not same.all():
+        cases, inverse = np.unique(keys, axis=0, return_inverse=True)
+    return cases, inverse.ravel()
+
+
 def pendulum_run(params, method):
     """Registry entry point: solve once per distinct case in the block, then rescale by
     omega1 and l2. Parameters a case does not use are blanked, so they do not split it."""
@@ -77,8 +108,7 @@ def pendulum_run(params, method):
                      np.where(rotor, p["rotor_inertia_ratio"], 0.0),
                      np.where(rotor, p["motor_slope"], 0.0),
                      np.where(rotor, p["idle_speed"], 0.0)], axis=1)
-    cases, index = np.unique(keys, axis=0, return_inverse=True)
-    index = index.ravel()
+    cases, index = distinct_rows(keys)
     rows = np.empty((cases.shape[0], N_ROW))
     case_status = np.empty(cases.shape[0], dtype=np.int8)
     pendulum_block(np.ascontiguousarray(cases), int(method[0]), method[1], method[2],
