@@ -13,6 +13,10 @@
    with RK4's stability edge (dynamics.md H7).
 4. Work-precision of the balancer's steady state: Fourier over harmonic counts against RK4
    shooting over step counts.
+5. Failure map: grazing contacts missed by event detection over (step size, approach speed),
+   a step-end sign change against the kernels' detector (benchmarks/failure_maps.py).
+6. Failure map: escape misclassified near the separatrix by an integrator alone, over
+   (rtol or step, distance to the separatrix).
 """
 
 from __future__ import annotations
@@ -218,6 +222,76 @@ def balancer_work_precision(path: Path):
             f"RK4 shooting fitted order {order:.2f}")
 
 
+def grazing_failure_map(path: Path):
+    """Fraction of 8 step phases in which the contact is found, over (step, approach
+    speed): step-end sign change on exact states against the kernels' detector (sub-step
+    samples and the interpolant's extremum) on RK4 steps."""
+    from benchmarks import failure_maps as fm
+
+    steps = np.geomspace(3e-3, 1.0, 21)
+    speeds = np.geomspace(1e-5, 0.3, 21)
+    phases = np.arange(8) / 8
+    found = {name: np.empty((len(speeds), len(steps))) for name in ("naive", "ours")}
+    for i, v in enumerate(speeds):
+        for j, h in enumerate(steps):
+            found["naive"][i, j] = np.mean([fm.naive_found(h, v, p) for p in phases])
+            found["ours"][i, j] = np.mean([fm.detector_found(h, v, p) for p in phases])
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True, sharey=True)
+    titles = {"naive": "sign change at step ends (as SciPy's events)",
+              "ours": "sub-step samples + extremum check (kernels), RK4"}
+    for ax, name in zip(axes, ("naive", "ours")):
+        mesh = ax.pcolormesh(steps, speeds, found[name], shading="nearest", cmap="RdYlGn",
+                             vmin=0, vmax=1)
+        ax.plot(steps, steps * math.sin(fm.APEX) / 2, "k--",
+                label="window = step (w = 2 v / sin A)")
+        ax.plot(steps, np.sqrt(2 * math.sin(fm.APEX) * steps**4 / 384), "b:",
+                label="eps = step^4/384 (interpolation error)")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("step [rotor rad]")
+        ax.set_title(titles[name], fontsize=9)
+        ax.legend(fontsize=8, loc="upper left")
+    axes[0].set_ylabel("approach speed at the stop [rad per rotor rad]")
+    fig.colorbar(mesh, ax=axes).set_label("fraction of step phases with the contact found")
+    fig.suptitle("Grazing contacts missed (H3): rigid pendulum, apex 1 rad, stop just below "
+                 f"it\nmade on {MACHINE}", fontsize=9)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def separatrix_failure_map(path: Path):
+    """Launches 2 (1 -+ delta) on the rigid pendulum: how many of the two an integrator
+    alone classifies right (return / escape), over (rtol or step, delta)."""
+    from benchmarks import failure_maps as fm
+
+    deltas = np.geomspace(1e-13, 1e-1, 25)
+    axes_spec = (("DOPRI5", pd.METHOD_DOPRI5, np.geomspace(1e-12, 1e-3, 19),
+                  "rtol (atol = rtol/100)", lambda a: a, "delta = rtol"),
+                 ("RK4", pd.METHOD_RK4, np.geomspace(3e-3, 0.5, 15),
+                  "step [rotor rad]", lambda a: a**4 / 100, "delta = step^4/100 (fitted)"))
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True, sharey=True)
+    for ax, (name, method, accuracies, label, guide, guide_label) in zip(axes, axes_spec):
+        right = np.array([[fm.separatrix_correct(method, a, d) / 2 for a in accuracies]
+                          for d in deltas])
+        mesh = ax.pcolormesh(accuracies, deltas, right, shading="nearest", cmap="RdYlGn",
+                             vmin=0, vmax=1)
+        ax.plot(accuracies, guide(accuracies), "k--", label=guide_label)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylim(deltas[0], deltas[-1])
+        ax.set_xlabel(label)
+        ax.set_title(f"{name} alone: escape if psi reaches -pi", fontsize=9)
+        ax.legend(fontsize=8, loc="upper left")
+    axes[0].set_ylabel("relative distance delta of the launch speed to the separatrix [-]")
+    fig.colorbar(mesh, ax=axes).set_label("fraction of the pair (return, escape) "
+                                          "classified right")
+    fig.suptitle("Escape misclassified near the separatrix (H1, H2): rigid pendulum; the "
+                 "kernels use the closed-form criterion instead\n"
+                 f"made on {MACHINE}", fontsize=9)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
 def main():
     docs = ROOT / "docs"
     docs.mkdir(exist_ok=True)
@@ -225,9 +299,12 @@ def main():
     loop_closure_near_node(docs / "loop_closure_near_node.png")
     balancer_failure_map(docs / "failure_map_balancer_rk4.png")
     balancer_work_precision(docs / "work_precision_balancer.png")
+    grazing_failure_map(docs / "failure_map_grazing.png")
+    separatrix_failure_map(docs / "failure_map_separatrix.png")
     print(f"wrote docs/: work_precision_pendulum.png (RK4 order {order:.2f}), "
           "loop_closure_near_node.png, failure_map_balancer_rk4.png, "
-          "work_precision_balancer.png")
+          "work_precision_balancer.png, failure_map_grazing.png, "
+          "failure_map_separatrix.png")
 
 
 if __name__ == "__main__":

@@ -424,26 +424,25 @@ def _first_crossing(h, y0, d0, y1, d1, level, upward):
 
 
 @njit(**KERNEL_OPTIONS)
-def _refine_peak(model, best, k, xi, kappa, method, exact):
-    """Golden-section search for max |psi''| in a window of steps around the largest
-    sample, with exact partial steps from the window's start (the cubic interpolant's psi'
-    is only third order)."""
-    y0, y1, f0, h, sampled = best
-    if h == 0.0:
+def _refine_peak(model, best, window, k, xi, kappa, method, exact):
+    """Golden-section search for max |psi''| over the two steps around the largest step-end
+    value (a smooth maximum lies within a step of its best sample), cut at the event
+    (``window`` from the first step's start). Each point is an exact partial step from the
+    start of its own step (the cubic interpolant's psi' is only third order)."""
+    a0, a1, af, b0, b1, bf, h = best
+    if h == 0.0 or window <= 0.0:
         return exact
 
     def accel_at(s):
         if s <= 0.0:
-            return abs(f0)
-        if method == METHOD_DOPRI5:
-            p0, p1, pf, e0, e1 = _dopri_step(model, y0, y1, f0, s, k, xi, kappa)
-        else:
-            p0, p1, pf = _rk4_step(model, y0, y1, f0, s, k, xi, kappa)
-        return abs(pf)
+            return abs(af)
+        if s <= h:
+            return abs(attempt_step(model, a0, a1, af, s, k, xi, kappa, method, 1.0, 1.0)[2])
+        return abs(attempt_step(model, b0, b1, bf, s - h, k, xi, kappa, method, 1.0, 1.0)[2])
 
     # golden section, one new evaluation per iteration; a location error d costs
     # O(d^2) in the peak value, so 1e-7 of the window is round-off in the value
-    lo, hi = 0.0, h
+    lo, hi = 0.0, window
     ratio = 0.5 * (math.sqrt(5.0) - 1.0)
     c, d = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
     fc, fd = accel_at(c), accel_at(d)
@@ -456,7 +455,7 @@ def _refine_peak(model, best, k, xi, kappa, method, exact):
             lo, c, fc = c, d, fd
             d = lo + ratio * (hi - lo)
             fd = accel_at(d)
-        if hi - lo <= 1e-7 * h:
+        if hi - lo <= 1e-7 * window:
             break
     return max(exact, fc, fd)
 
@@ -482,8 +481,9 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
     """
     t, y0, y1 = 0.0, psi0, dpsi0
     f0 = acceleration(model, y0, y1, k, xi, kappa)
-    best = (0.0, 0.0, 0.0, 0.0, 0.0)  # (y0, y1, f0, window, peak): where to refine the peak
-    prev = (y0, y1, f0, 0.0)  # the start of the previous step and its length
+    # where to refine the peak: the step ending at the largest |psi''| (start, end, length)
+    best = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    best_t = 0.0
     h = initial_step(method, dt, dpsi0, rtol)
     if f0 * dpsi0 < 0.0:
         # pushed back towards the surface: the first step must end before the ballistic
@@ -525,7 +525,8 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
             status = FLIGHT_ESCAPE if event == 0 else FLIGHT_IMPACT
             peak = max(peak, abs(pf))
             if refine_peak:
-                peak = _refine_peak(model, best, k, xi, kappa, method, peak)
+                peak = _refine_peak(model, best, min(2.0 * best[6], t + s - best_t), k, xi,
+                                    kappa, method, peak)
             return status, t + s, p1, -lowest, peak, steps, rejected
         # the lowest point and the peak acceleration, refined on this step's interpolant
         if y1 < 0.0 <= n1:
@@ -533,15 +534,15 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
         lowest = min(lowest, n0 - psi0)
         if abs(fn) > peak:
             peak = abs(fn)
-            # a smooth maximum lies within a step of the best step end: search from the
-            # previous step's start to one step past this one
-            best = (prev[0], prev[1], prev[2], prev[3] + 2.0 * h, peak)
-        prev = (y0, y1, f0, h)
+            best = (y0, y1, f0, n0, n1, fn, h)
+            best_t = t
         t += h
         y0, y1, f0 = n0, n1, fn
         if method == METHOD_DOPRI5:
             h = next_step(h, err, after_reject, err_prev)
             err_prev = err
+        else:
+            h = dt  # a first step cut short by the ballistic-return cap is the only one
         after_reject = False
     return FLIGHT_MAX_STEPS, t, nan, nan, nan, steps, rejected
 

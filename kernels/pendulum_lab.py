@@ -125,8 +125,8 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
     peak = abs(f0)
     after_reject = False
     err_prev = 1.0
-    best = (y0, y1, f0, 0.0, abs(f0))
-    prev = (y0, y1, f0, 0.0)
+    best = (y0, y1, f0, y0, y1, f0, 0.0)  # the step ending at the largest |psi''|
+    best_t = t0
     while steps + rejected < max_steps:
         if t - t0 > horizon:
             return (LAB_NO_IMPACT, t, y0, y1, nan, 0.0, passes, amp, peak, steps, rejected)
@@ -173,28 +173,30 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
                                              rtol, atol)
             if abs(p0) <= window:
                 peak = max(peak, abs(pf))
-                peak = _refine_peak(model, best, k, xi, kappa, method, peak)
+                peak = _refine_peak(model, best, min(2.0 * best[6], t + s - best_t), k, xi,
+                                    kappa, method, peak)
                 amp = max(amp, abs(p0))
                 return (LAB_CONTACT, t + s, p0, p1, level, 1.0 if up else -1.0, passes,
                         amp, peak, steps, rejected)
             # passed inside the blade: the faces move on, the step continues from here
             passes += 1
             lower = level if up else lower - 2.0 * math.pi
-            t, y0, y1, f0 = t + s, p0, p1, pf
-            prev = (y0, y1, f0, 0.0)
+            t, y0, y1, f0 = t + s, p0, p1, pf  # a pass leaves the state as it is
             continue
         amp = max(amp, abs(n0))
         if (y1 < 0.0) != (n1 < 0.0):  # a turning point inside the step
             amp = max(amp, abs(turning_value(h, y0, y1, n0, n1)))
         if abs(fn) > peak:
             peak = abs(fn)
-            best = (prev[0], prev[1], prev[2], prev[3] + 2.0 * h, peak)
-        prev = (y0, y1, f0, h)
+            best = (y0, y1, f0, n0, n1, fn, h)
+            best_t = t
         t += h
         y0, y1, f0 = n0, n1, fn
         if method == METHOD_DOPRI5:
             h = next_step(h, err, after_reject, err_prev)
             err_prev = err
+        else:
+            h = dt  # a first step cut short by the ballistic-return cap is the only one
         after_reject = False
     return (LAB_MAX_STEPS, t, y0, y1, nan, 0.0, passes, amp, peak, steps, rejected)
 

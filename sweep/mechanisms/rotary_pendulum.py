@@ -70,8 +70,9 @@ assert tuple(p.name for p in PARAMETERS) == kr.PARAMETERS
 assert tuple(o.name for o in OUTPUTS) == kr.OUTPUTS
 
 METHOD = {
-    "integrator": Parameter("integrator", "1", "auto (the closed form wherever the model "
-                            "has one), closed_form, rk4 or dopri5", default="auto",
+    "integrator": Parameter("integrator", "1", "auto (the closed form where the model has "
+                            "one, else DOPRI5 at tol/10), closed_form, rk4 or dopri5",
+                            default="auto",
                             choices={"auto": k.INTEGRATOR_AUTO,
                                      "closed_form": k.INTEGRATOR_CLOSED,
                                      "rk4": k.INTEGRATOR_RK4, "dopri5": k.INTEGRATOR_DOPRI5}),
@@ -83,6 +84,8 @@ METHOD = {
                     maximum=0.5),
     "max_impacts": Parameter("max_impacts", "1", "impacts simulated at most",
                              default=1000, minimum=1, maximum=10**6, integer=True),
+    "tol": Parameter("tol", "1", "auto: relative accuracy requested of the outputs",
+                     default=1e-8, minimum=1e-11, maximum=1e-2),
 }
 assert tuple(METHOD) == kr.METHOD
 
@@ -100,6 +103,11 @@ def _check(given: dict) -> None:
     for name in ("rotor_inertia_ratio", "motor_slope", "idle_speed"):
         if name in given and "rotor" not in models:
             raise UserError(f"{name}: used only by model = \"rotor\"")
+    integrators = given.get("method.integrator", {"auto"})
+    for key, needs in (("rtol", "dopri5"), ("atol", "dopri5"), ("dt", "rk4"), ("tol", "auto")):
+        if "method." + key in given and needs not in integrators:
+            raise UserError(f"method.{key}: used only with integrator = \"{needs}\""
+                            + ("; auto takes tol" if needs == "dopri5" else ""))
     if "closed_form" in given.get("method.integrator", ()) and (
             "rotor" in models or "lab_window" in tools):
         raise UserError("method.integrator: \"closed_form\" exists only for the paper and "
