@@ -24,7 +24,6 @@ from __future__ import annotations
 import math
 import platform
 import sys
-import time
 from pathlib import Path
 
 import matplotlib
@@ -36,6 +35,7 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+from benchmarks.timing import best_time  # noqa: E402
 from kernels import fourbar as fb  # noqa: E402
 from kernels import pendulum as pd  # noqa: E402
 from kernels.crank_rocker import synthesize_largest_rod  # noqa: E402
@@ -54,16 +54,6 @@ def _finish(fig, ax, path: Path, xlabel: str, ylabel: str, title: str) -> None:
     plt.close(fig)
 
 
-def timed(fn, repeats=7):
-    fn()
-    best = math.inf
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t)
-    return best
-
-
 def pendulum_work_precision(path: Path):
     k, xi, r = 2.5, 4.0, 0.2
     out = np.empty(11)
@@ -77,13 +67,13 @@ def pendulum_work_precision(path: Path):
     series = {}
     dts = np.geomspace(0.2, 0.004, 9)
     series["RK4 (dt = 0.2 ... 0.004)"] = [
-        (timed(lambda d=d: pd.dimensionless(0, k, xi, 0.8, r, 2, 0, 0, d, 1000, out)),
+        (best_time(lambda d=d: pd.dimensionless(0, k, xi, 0.8, r, 2, 0, 0, d, 1000, out)),
          error(2, 0.0, d)) for d in dts]
     rtols = 10.0 ** -np.arange(3, 13.5, 1.0)
     series["DOPRI5 (rtol = 1e-3 ... 1e-13)"] = [
-        (timed(lambda q=q: pd.dimensionless(0, k, xi, 0.8, r, 3, q, q * 1e-2, 0, 1000, out)),
+        (best_time(lambda q=q: pd.dimensionless(0, k, xi, 0.8, r, 3, q, q * 1e-2, 0, 1000, out)),
          error(3, q, 0.0)) for q in rtols]
-    t_closed = timed(lambda: pd.dimensionless(0, k, xi, 0.8, r, 1, 0, 0, 0, 1000, out))
+    t_closed = best_time(lambda: pd.dimensionless(0, k, xi, 0.8, r, 1, 0, 0, 0, 1000, out))
     rk4_err = np.array([e for _, e in series["RK4 (dt = 0.2 ... 0.004)"]])
     usable = rk4_err > 1e-13
     order = np.polyfit(np.log(dts[usable]), np.log(rk4_err[usable]), 1)[0]
@@ -200,14 +190,14 @@ def balancer_work_precision(path: Path):
     fourier = []
     for m in (2, 3, 4, 6, 8, 10, 13, 16, 20, 25):
         err = np.max(np.abs(g2_series(grid, m) - ref)) / scale
-        fourier.append((timed(lambda m=m: bl.response(a, b, g0, f, r, eta, 0, 1e-14, 1e-9, m,
+        fourier.append((best_time(lambda m=m: bl.response(a, b, g0, f, r, eta, 0, 1e-14, 1e-9, m,
                                                      out)), err))
     shooting = []
     for n in (50, 100, 200, 400, 800, 1600, 3200):
         theta, g, g2 = bl.shooting(*geom, 1.0, f, r, eta, g0 / 2, True, n)
         err = np.max(np.abs(g2 - g2_series(theta, full))) / scale
-        shooting.append((timed(lambda n=n: bl.shooting(*geom, 1.0, f, r, eta, g0 / 2, True, n),
-                               repeats=3), err))
+        shooting.append((best_time(lambda n=n: bl.shooting(*geom, 1.0, f, r, eta, g0 / 2, True, n),
+                               3), err))
     steps = np.array([50, 100, 200, 400, 800, 1600, 3200])
     errs = np.array([e for _, e in shooting])
     order = -np.polyfit(np.log(steps[errs > 1e-13]), np.log(errs[errs > 1e-13]), 1)[0]

@@ -16,7 +16,8 @@ import click
 from sweep.errors import UserError
 
 EXAMPLES = {name: f"{name}.toml" for name in ("crank_rocker", "linkage_forces", "six_link",
-                                                "spring_balancer", "rotary_pendulum")}
+                                                "spring_balancer", "rotary_pendulum",
+                                                "rotary_pendulum_blade")}
 DEFAULT_EXAMPLE = "crank_rocker"
 
 
@@ -106,10 +107,10 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
 def examples(name, output):
     """List the built-in specs, or print (or write) one of them as TOML."""
     if name is None:
-        from sweep import registry
-
+        import tomllib
         for key in sorted(EXAMPLES):
-            click.echo(f"{key:16s} {registry.get(key).title}")
+            title = tomllib.loads(_example_text(key)).get("title", "")
+            click.echo(f"{key:22s} {title}")
         return
     if name not in EXAMPLES:
         raise UserError(f"name: unknown example {name!r}; allowed: {', '.join(EXAMPLES)}")

@@ -10,50 +10,7 @@ import zlib
 import numpy as np
 import pytest
 
-from kernels import pendulum as pd
-from kernels import rotary_pendulum as kr
-from sweep import registry
-
-MECH = registry.get("rotary_pendulum")
-OUT = {name: j for j, name in enumerate(kr.OUTPUTS)}
-VALUES = ("amplitude", "frequency_ratio", "impact_interval", "impact_speed",
-          "acceleration_peak")
-EVALS_PER_STEP = {"rk4": 4, "dopri5": 6}  # new right-hand sides per step (DOPRI5: FSAL)
-
-
-def points(model, n, seed):
-    """Random designs of one model, as parameter columns (omega1 and l2 vary too)."""
-    rng = np.random.default_rng(seed)
-    cols = {p.name: np.full(n, p.encode(p.default)) if p.default is not None
-            else np.full(n, math.nan) for p in MECH.parameters}
-    k = rng.uniform(0.9, 2.5, n)
-    cols["model"][:] = {"paper": pd.MODEL_PAPER, "rigid": pd.MODEL_RIGID,
-                        "rotor": kr.MODEL_ROTOR}[model]
-    cols["k"] = k
-    cols["omega1"] = rng.uniform(20, 100, n)
-    cols["l2"] = rng.uniform(0.02, 0.06, n)
-    if model == "paper":
-        crit = np.array([pd.paper_critical_speed(x, 4.0) for x in k])
-        cols["R"] = rng.uniform(0, 0.8, n) * (crit - 1 - k) / (crit + 1 + k)
-    else:  # contact outboard of the centre of percussion, so that the pendulum returns
-        cols["kappa"] = (1 + k) ** 2 / (4 * k) * rng.uniform(1.1, 1.5, n)
-        cols["R"] = rng.uniform(0, 0.02, n)  # v* stays below v_crit for kappa >= 1.1 k*
-    if model == "rotor":
-        cols["rotor_inertia_ratio"] = rng.uniform(20, 200, n)
-        cols["motor_slope"] = rng.uniform(3, 50, n)
-    return np.array([cols[p.name] for p in MECH.parameters])
-
-
-def run(params, integrator="auto", tol=1e-8, rtol=1e-10, dt=0.002, atol_per_rtol=1e-2):
-    method = np.array([MECH.method["integrator"].encode(integrator), rtol,
-                       rtol * atol_per_rtol, dt, 1000, tol])
-    out, status, _ = MECH.run(params, method)
-    return out, status
-
-
-def errors(out, ref):
-    return np.max([np.abs(out[OUT[v]] / ref[OUT[v]] - 1) for v in VALUES], axis=0)
-
+from benchmarks.auto_cases import MECH, OUT, cost, errors, points, run
 
 @pytest.mark.parametrize("model", ["paper", "rigid", "rotor"])
 @pytest.mark.parametrize("tol", [1e-4, 1e-7])
@@ -67,10 +24,6 @@ def test_auto_meets_the_requested_tolerance_at_random_points(model, tol):
     used = "closed_form" if model != "rotor" else "dopri5"
     codes = MECH.outputs[OUT["method_used"]].flags
     assert {codes[int(c)] for c in out[OUT["method_used"]]} == {used}
-
-
-def cost(out, method):
-    return np.sum(out[OUT["n_steps"]]) * EVALS_PER_STEP[method]
 
 
 @pytest.fixture(scope="module")
@@ -116,3 +69,61 @@ def test_auto_picks_the_closed_form_where_it_exists_and_records_it(tmp_path):
     used = [meanings[int(v)] for v in ds["method_used"].values.ravel()]
     assert used == ["closed_form", "dopri5"]
     assert '"tol": 1e-06' in ds.attrs["method"]
+
+
+# ---------------------------------------------------------------------------- balancer
+
+BALANCER_METRICS = ("moment_invariant_peak_free", "moment_invariant_peak_balanced",
+                    "balancing_coefficient", "dynamic_coefficient_free",
+                    "dynamic_coefficient_balanced", "acceleration_invariant_rigid")
+
+
+@pytest.fixture(scope="module")
+def balancer_sweep():
+    """60 random (geometry, f, r, eta) points of the spring balancer away from resonance,
+    with the all-harmonics reference."""
+    from kernels import balancer as bl
+    rng = np.random.default_rng(11)
+    geometries = [(3.0, 1.0, 3.5, 2.5), (3.0, 1.0, 3.0, 1.6), (2.5, 1.0, 2.8, 2.2)]
+    coefs = [bl.fourier_coefficients(*g, 1.0) for g in geometries]
+    cases = []
+    while len(cases) < 60:
+        a, b, g0 = coefs[rng.integers(len(coefs))]
+        f, r, eta = rng.uniform(0.3, 2.0), rng.uniform(0.2, 1.5), rng.uniform(0.02, 0.2)
+        out = np.empty(len(bl.OUTPUTS))
+        if bl.response(a, b, g0, f, r, eta, bl.NEUTRAL_HALF_SWING, 1e-14, 1e-9, 4096,
+                       out) == 0:
+            cases.append((a, b, g0, f, r, eta, out.copy()))
+    return cases
+
+
+def balancer_errors_and_cost(cases, tol, forced):
+    from kernels import balancer as bl
+    names = list(bl.OUTPUTS)
+    worst, harmonics = 0.0, 0
+    for a, b, g0, f, r, eta, ref in cases:
+        out = np.empty(len(bl.OUTPUTS))
+        bl.response(a, b, g0, f, r, eta, bl.NEUTRAL_HALF_SWING, tol, 1e-9, forced, out)
+        worst = max(worst, max(abs(out[names.index(m)] / ref[names.index(m)] - 1)
+                               for m in BALANCER_METRICS))
+        harmonics += int(out[names.index("harmonics_used")])
+    return worst, harmonics
+
+
+@pytest.mark.parametrize("tol", [1e-4, 1e-8, 1e-12])
+def test_balancer_auto_harmonics_meet_tol_within_20_percent_of_the_best_fixed_count(
+        balancer_sweep, tol):
+    """The balancer's auto: the harmonic count from the weighted coefficient tail. It meets
+    the tolerance at every point, and uses at most 20 % more harmonics (the cost of the
+    Fourier response is linear in them) than the smallest fixed count that meets it at
+    every point, found in hindsight. RK4 shooting, the other method, costs 100x more at any
+    tolerance (docs/work_precision_balancer.png)."""
+    worst, auto = balancer_errors_and_cost(balancer_sweep, tol, 0)
+    assert worst <= tol
+    best = None
+    for count in range(1, 400):
+        worst_fixed, _ = balancer_errors_and_cost(balancer_sweep, tol, count)
+        if worst_fixed <= tol:
+            best = count * len(balancer_sweep)
+            break
+    assert best is not None and auto <= 1.2 * best

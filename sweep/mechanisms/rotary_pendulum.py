@@ -54,7 +54,7 @@ OUTPUTS = (
     Output("impact_interval", "rad", "rotor angle between impacts in steady state (tau1; "
            "on the blade, between the impacts opening each contact)"),
     Output("impacts_to_converge", "1", "impacts from rest to the steady state (to "
-           "1e-12, or 10 rtol when integrated), or until escape"),
+           "1e-12 by the closed form, to 10 rtol when integrated), or until escape"),
     Output("acceleration_peak", "rad s-2", "peak relative angular acceleration of the "
            "pendulum in steady state"),
     Output("restitution_critical", "1", "largest R with a periodic impact regime (R_crit, "

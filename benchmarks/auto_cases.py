@@ -1,0 +1,57 @@
+"""Random rotary-pendulum designs and the accuracy and cost measures of integrator = "auto"
+(shared by tests/test_auto.py and benchmarks/bench_auto.py)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from kernels import pendulum as pd
+from kernels import rotary_pendulum as kr
+from sweep import registry
+
+MECH = registry.get("rotary_pendulum")
+OUT = {name: j for j, name in enumerate(kr.OUTPUTS)}
+VALUES = ("amplitude", "frequency_ratio", "impact_interval", "impact_speed",
+          "acceleration_peak")
+EVALS_PER_STEP = {"rk4": 4, "dopri5": 6}  # new right-hand sides per step (DOPRI5: FSAL)
+
+
+def points(model, n, seed):
+    """Random designs of one model, as parameter columns (omega1 and l2 vary too)."""
+    rng = np.random.default_rng(seed)
+    cols = {p.name: np.full(n, p.encode(p.default)) if p.default is not None
+            else np.full(n, math.nan) for p in MECH.parameters}
+    k = rng.uniform(0.9, 2.5, n)
+    cols["model"][:] = {"paper": pd.MODEL_PAPER, "rigid": pd.MODEL_RIGID,
+                        "rotor": kr.MODEL_ROTOR}[model]
+    cols["k"] = k
+    cols["omega1"] = rng.uniform(20, 100, n)
+    cols["l2"] = rng.uniform(0.02, 0.06, n)
+    if model == "paper":
+        crit = np.array([pd.paper_critical_speed(x, 4.0) for x in k])
+        cols["R"] = rng.uniform(0, 0.8, n) * (crit - 1 - k) / (crit + 1 + k)
+    else:  # contact outboard of the centre of percussion, so that the pendulum returns
+        cols["kappa"] = (1 + k) ** 2 / (4 * k) * rng.uniform(1.1, 1.5, n)
+        cols["R"] = rng.uniform(0, 0.02, n)  # v* stays below v_crit for kappa >= 1.1 k*
+    if model == "rotor":
+        cols["rotor_inertia_ratio"] = rng.uniform(20, 200, n)
+        cols["motor_slope"] = rng.uniform(3, 50, n)
+    return np.array([cols[p.name] for p in MECH.parameters])
+
+
+def run(params, integrator="auto", tol=1e-8, rtol=1e-10, dt=0.002, atol_per_rtol=1e-2):
+    method = np.array([MECH.method["integrator"].encode(integrator), rtol,
+                       rtol * atol_per_rtol, dt, 1000, tol])
+    out, status, _ = MECH.run(params, method)
+    return out, status
+
+
+def errors(out, ref):
+    return np.max([np.abs(out[OUT[v]] / ref[OUT[v]] - 1) for v in VALUES], axis=0)
+
+
+def cost(out, method):
+    """Right-hand-side evaluations of a run (deterministic, unlike wall time)."""
+    return np.sum(out[OUT["n_steps"]]) * EVALS_PER_STEP[method]

@@ -1,0 +1,66 @@
+"""integrator = "auto" against the best single method, in wall time (the tests count
+right-hand sides instead): for each model and requested tolerance, the best single method is
+the fastest of closed form, DOPRI5 at the loosest rtol and RK4 at the largest step meeting
+the tolerance at every design of the sweep, found in hindsight. Best of 3 runs each.
+
+Run: .venv/bin/python benchmarks/bench_auto.py   (writes benchmarks/results/auto.json)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import platform
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from benchmarks.auto_cases import errors, points, run  # noqa: E402
+from benchmarks.timing import best_time  # noqa: E402
+
+
+def candidates(tol):
+    yield "closed_form", dict(integrator="closed_form")
+    for atol_per_rtol in (1.0, 1e-2):
+        for rtol in tol * np.geomspace(1.0, 1e-3, 13):
+            yield (f"dopri5 rtol {rtol:.2g} atol {rtol * atol_per_rtol:.2g}",
+                   dict(integrator="dopri5", rtol=rtol, atol_per_rtol=atol_per_rtol))
+    for dt in 0.4 / 2.0 ** np.arange(10):
+        yield f"rk4 dt {dt:.3g}", dict(integrator="rk4", dt=dt)
+
+
+def main():
+    result = {"machine": platform.node()}
+    for model in ("paper", "rotor"):
+        params = np.concatenate([points(model, 12, seed=s) for s in range(400, 405)],
+                                axis=1)
+        ref, _ = run(params, "dopri5", rtol=1e-13)
+        for tol in (1e-4, 1e-6, 1e-8):
+            out, status = run(params, "auto", tol=tol)
+            assert np.all(status == 0) and np.max(errors(out, ref)) <= tol
+            t_auto = best_time(lambda: run(params, "auto", tol=tol), 3)
+            best_name, best_t, seen = None, math.inf, set()
+            for name, kw in candidates(tol):
+                family = kw["integrator"] + str(kw.get("atol_per_rtol", ""))
+                if family in seen or (model == "rotor" and family == "closed_form"):
+                    continue
+                trial, status = run(params, **kw)
+                if np.all(status == 0) and np.max(errors(trial, ref)) <= tol:
+                    seen.add(family)  # the loosest setting of this family that meets tol
+                    t = best_time(lambda kw=kw: run(params, **kw), 3)
+                    if t < best_t:
+                        best_name, best_t = name, t
+            result[f"{model} tol {tol:g}"] = {"auto_s": t_auto, "best": best_name,
+                                               "best_s": best_t, "auto_over_best": t_auto
+                                               / best_t}
+            print(f"{model:6s} tol {tol:g}: auto {t_auto * 1e3:7.2f} ms, best single "
+                  f"{best_name} {best_t * 1e3:7.2f} ms, ratio {t_auto / best_t:.2f}")
+    Path(__file__).resolve().parent.joinpath("results", "auto.json").write_text(
+        json.dumps(result, indent=2))
+
+
+if __name__ == "__main__":
+    main()
