@@ -1,5 +1,5 @@
 """Six-link throughput: grid points per second per core (2 impacts by bisection, peaks on
-2880 crank angles per 4 pi cycle), and the per-angle cost.
+720 crank angles per 4 pi cycle by default, refined), and the per-angle cost.
 
 Run: .venv/bin/python benchmarks/bench_six_link.py   (writes benchmarks/results/*.json)
 """
@@ -28,7 +28,7 @@ def main():
                        rng.uniform(-3, 3, POINTS), np.zeros(POINTS), np.ones(POINTS),
                        np.full(POINTS, 30.0), np.full(POINTS, 0.1)])
     result = {"machine": platform.node(), "points": POINTS}
-    for samples in (360, 2880):
+    for samples in (720, 2880):
         method = np.array([1e-9, samples, 0])
         sl.six_link_run(params[:, :2], method)
         times = []

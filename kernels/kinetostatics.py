@@ -22,6 +22,7 @@ from numba import njit
 from kernels import KERNEL_OPTIONS
 from kernels import status as st
 from kernels.crank_rocker import impact_branch
+from kernels.elementary import golden_points, golden_shrink
 from kernels.fourbar import (
     CHANGE_POINT_A,
     CHANGE_POINT_B,
@@ -183,6 +184,41 @@ def _joint_forces(phi1, pr, sigma, res, snap, gx, gy):
 
 
 @njit(**KERNEL_OPTIONS)
+def _peak_quantity(q, res):
+    """|F_A|, |F_B|, |F_C|, |F_D| or |M_b| from a kinetostatic solution."""
+    if q == 0:
+        return math.sqrt(res[R_F14X] ** 2 + res[R_F14Y] ** 2)
+    if q == 1:
+        return math.sqrt(res[R_F21X] ** 2 + res[R_F21Y] ** 2)
+    if q == 2:
+        return math.sqrt(res[R_F32X] ** 2 + res[R_F32Y] ** 2)
+    if q == 3:
+        return math.sqrt(res[R_F34X] ** 2 + res[R_F34Y] ** 2)
+    return abs(res[R_MB])
+
+
+@njit(**KERNEL_OPTIONS)
+def _refine_peak(q, a, b, sampled, pr, sigma, res, tol, gx, gy):
+    """Golden section for the maximum of quantity q on [a, b] (one sample spacing either
+    side of the best sample), to 1e-10 of the interval: a location error d costs O(d^2) in
+    the value. Never below the sampled maximum."""
+    def value(phi):
+        if not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
+            return -1.0
+        return _peak_quantity(q, res)
+
+    c, d = golden_points(a, b)
+    fc, fd = value(c), value(d)
+    while b - a > 1e-10 * (1.0 + abs(a)):
+        a, b, c, d, fc, fd, left = golden_shrink(a, b, c, d, fc, fd)
+        if left:
+            fc = value(c)
+        else:
+            fd = value(d)
+    return max(sampled, fc, fd)
+
+
+@njit(**KERNEL_OPTIONS)
 def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     """One grid point: status, the scalar outputs (out) and the profiles (prof[k, j])."""
     nan = math.nan
@@ -228,22 +264,33 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     out[5] = math.sqrt(square / (2.0 * math.pi))
     out[6] = direction * work  # energy delivered by the drive per cycle
 
-    # peaks on a uniform sample, outside |phi1 - node| < window (H11: F^n ~ 1/dphi1)
+    # peaks outside |phi1 - node| < window (H11: F^n ~ 1/dphi1): a uniform sample finds
+    # each maximum's basin, golden section on the exact kinetostatics refines it
     lo = start + (window if kind != 0 else 0.0)
     hi = start + 2.0 * math.pi - (window if kind != 0 else 2.0 * math.pi / n_peak)
-    pa = pb = pc = pd = pm = 0.0
+    spacing = (hi - lo) / (n_peak - 1)
+    best = np.full(5, -1.0)
+    where = np.zeros(5)
     for k in range(n_peak):
-        phi = lo + (hi - lo) * k / (n_peak - 1)
+        phi = lo + spacing * k
         if count > 1 and abs(phi - start - math.pi) < window:
             continue  # the second node at phi1* + pi (H10)
         if not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
             return st.NOT_ASSEMBLABLE
-        pa = max(pa, math.sqrt(res[R_F14X] ** 2 + res[R_F14Y] ** 2))
-        pb = max(pb, math.sqrt(res[R_F21X] ** 2 + res[R_F21Y] ** 2))
-        pc = max(pc, math.sqrt(res[R_F32X] ** 2 + res[R_F32Y] ** 2))
-        pd = max(pd, math.sqrt(res[R_F34X] ** 2 + res[R_F34Y] ** 2))
-        pm = max(pm, abs(res[R_MB]))
-    out[0], out[1], out[2], out[3], out[4] = pa, pb, pc, pd, pm
+        for q in range(5):
+            value = _peak_quantity(q, res)
+            if value > best[q]:
+                best[q], where[q] = value, phi
+    for q in range(5):
+        a, b = where[q] - spacing, where[q] + spacing
+        if kind != 0:  # stay out of the node's window (a smooth cycle is periodic)
+            a, b = max(lo, a), min(hi, b)
+        if count > 1:  # stay out of the second node's window
+            if where[q] < start + math.pi:
+                b = min(b, start + math.pi - window)
+            else:
+                a = max(a, start + math.pi + window)
+        out[q] = _refine_peak(q, a, b, best[q], pr, sigma, res, tol, gx, gy)
 
     # profiles: the rigid-model values at every sampled angle (NaN only exactly at a node)
     for j in range(prof_angles.shape[0]):

@@ -21,6 +21,7 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS
 from kernels import status as st
+from kernels.elementary import golden_points, golden_shrink
 
 MODEL_PAPER, MODEL_RIGID = 0, 1
 #: meanings of the codes of the ``regime`` output (CF flag_meanings, in this order)
@@ -109,21 +110,14 @@ def paper_peak_acceleration(v, k, xi, amplitude):
             best_j, best = j, val
     lo = amplitude * max(0, best_j - 1) / n
     hi = amplitude * min(n, best_j + 1) / n
-    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
-    c = hi - ratio * (hi - lo)
-    d = lo + ratio * (hi - lo)
+    c, d = golden_points(lo, hi)
     fc, fd = accel(c), accel(d)
-    for _ in range(100):  # golden section: one new evaluation per iteration
-        if fc > fd:
-            hi, d, fd = d, c, fc
-            c = hi - ratio * (hi - lo)
+    while hi - lo >= 1e-14 * amplitude:
+        lo, hi, c, d, fc, fd, left = golden_shrink(lo, hi, c, d, fc, fd)
+        if left:
             fc = accel(c)
         else:
-            lo, c, fc = c, d, fd
-            d = lo + ratio * (hi - lo)
             fd = accel(d)
-        if hi - lo < 1e-14 * amplitude:
-            break
     return max(best, fc, fd)
 
 
@@ -440,23 +434,16 @@ def _refine_peak(model, best, window, k, xi, kappa, method, exact):
             return abs(attempt_step(model, a0, a1, af, s, k, xi, kappa, method, 1.0, 1.0)[2])
         return abs(attempt_step(model, b0, b1, bf, s - h, k, xi, kappa, method, 1.0, 1.0)[2])
 
-    # golden section, one new evaluation per iteration; a location error d costs
-    # O(d^2) in the peak value, so 1e-7 of the window is round-off in the value
+    # golden section to 1e-7 of the window: its O(d^2) cost in the value is round-off
     lo, hi = 0.0, window
-    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
-    c, d = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
+    c, d = golden_points(lo, hi)
     fc, fd = accel_at(c), accel_at(d)
-    for _ in range(60):
-        if fc > fd:
-            hi, d, fd = d, c, fc
-            c = hi - ratio * (hi - lo)
+    while hi - lo > 1e-7 * window:
+        lo, hi, c, d, fc, fd, left = golden_shrink(lo, hi, c, d, fc, fd)
+        if left:
             fc = accel_at(c)
         else:
-            lo, c, fc = c, d, fd
-            d = lo + ratio * (hi - lo)
             fd = accel_at(d)
-        if hi - lo <= 1e-7 * window:
-            break
     return max(exact, fc, fd)
 
 
@@ -563,6 +550,14 @@ def _critical(model, k, xi, kappa):
 
 @njit(**KERNEL_OPTIONS)
 def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts, out):
+    """Steady state of the impact regime in omega1 units (see steady_state)."""
+    return steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts, out,
+                        np.zeros(1))
+
+
+@njit(**KERNEL_OPTIONS)
+def steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts, out,
+                 rejected):
     """Steady state of the impact regime in omega1 units; returns the kernel status.
 
     out: regime, amplitude, n, tau1 (impact interval), v* (pre-impact speed), impacts to
@@ -607,6 +602,7 @@ def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impact
         status, tau1, v_new, amp, acc, n_ok, n_bad = integrate_flight(
             model, launch, k, xi, kappa, method, rtol, atol, dt, 1000000, final or r == 0.0)
         steps += n_ok + n_bad
+        rejected[0] += n_bad
         events += 1
         if status == FLIGHT_ESCAPE:
             out[0], out[5], out[8], out[9] = REGIME_ESCAPE, j, steps, events

@@ -286,6 +286,7 @@ def lab_steady(model, k, xi, kappa, r, window, method, rtol, atol, dt, max_impac
     level, side = 0.0, 1.0  # on the blade's working face, arrived from behind
     gdot = 1.0  # G'- of the first impact: the striker arrives with the rotor's speed
     steps = events = 0
+    out[12] = 0.0  # rejected steps
     n_sec = 0
     zeno_since = 0.0
     amp_since, peak_since = 0.0, 0.0
@@ -338,6 +339,7 @@ def lab_steady(model, k, xi, kappa, r, window, method, rtol, atol, dt, max_impac
          n_bad) = lab_flight(model, t, psi, dpsi, lower, window, k, xi, kappa, method, rtol,
                              atol, dt, 10**6, horizon)
         steps += n_ok + n_bad
+        out[12] += n_bad
         events += 1 + passes
         amp_since, peak_since = max(amp_since, amp), max(peak_since, peak)
         flight_time = t_new - t

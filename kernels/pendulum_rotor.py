@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
+from kernels.elementary import golden_points, golden_shrink
 from kernels.pendulum import _first_crossing, classify_period
 
 FLIGHT_IMPACT, FLIGHT_ESCAPE, FLIGHT_MAX_STEPS, FLIGHT_UNDERFLOW = 0, 1, 2, 3
@@ -247,20 +248,14 @@ def _refine_peak(a, fa, b, fb, h, window, k, xi, j1, slope, idle, method, peak, 
         return abs(f_part[3])
 
     lo, hi = 0.0, window
-    ratio = 0.5 * (math.sqrt(5.0) - 1.0)
-    c, d = hi - ratio * (hi - lo), lo + ratio * (hi - lo)
+    c, d = golden_points(lo, hi)
     fc, fd = accel_at(c), accel_at(d)
-    for _ in range(60):
-        if fc > fd:
-            hi, d, fd = d, c, fc
-            c = hi - ratio * (hi - lo)
+    while hi - lo > 1e-7 * window:
+        lo, hi, c, d, fc, fd, left = golden_shrink(lo, hi, c, d, fc, fd)
+        if left:
             fc = accel_at(c)
         else:
-            lo, c, fc = c, d, fd
-            d = lo + ratio * (hi - lo)
             fd = accel_at(d)
-        if hi - lo <= 1e-7 * window:
-            break
     return max(peak, fc, fd)
 
 
@@ -296,6 +291,7 @@ def rotor_steady(k, xi, kappa, r, j1, slope, idle, method, rtol, atol, dt, max_i
     y = np.empty(4)
     w, v = idle, 0.0
     steps = events = 0
+    out[12] = 0.0  # rejected steps
     p = 0
     j = 0
     for j in range(max_impacts + 1):
@@ -313,6 +309,7 @@ def rotor_steady(k, xi, kappa, r, j1, slope, idle, method, rtol, atol, dt, max_i
         status, tau, amp, acc, n_ok, n_bad = rotor_flight(
             y, k_cm, xi, j1, slope, idle, method, rtol, atol, dt, 10**6, False)
         steps += n_ok + n_bad
+        out[12] += n_bad
         events += 1
         if status == FLIGHT_ESCAPE:
             out[0], out[5], out[8], out[9] = regimes[3], j + 1, steps, events
@@ -353,6 +350,7 @@ def rotor_steady(k, xi, kappa, r, j1, slope, idle, method, rtol, atol, dt, max_i
             status, tau, amp, acc, n_ok, n_bad = rotor_flight(
                 y, k_cm, xi, j1, slope, idle, method, rtol, atol, dt, 10**6, True)
             steps += n_ok + n_bad
+            out[12] += n_bad
             events += 1
             if status != FLIGHT_IMPACT:  # the cycle did not repeat after all
                 out[0] = math.nan

@@ -17,7 +17,8 @@ PARAMETERS = ("model", "k", "xi", "kappa", "R", "omega1", "l2", "tool", "tool_wi
               "rotor_inertia_ratio", "motor_slope", "idle_speed")
 OUTPUTS = ("regime", "amplitude", "frequency_ratio", "period", "impact_speed",
            "impact_interval", "impacts_to_converge", "acceleration_peak",
-           "restitution_critical", "rotor_speed_ratio", "n_steps", "n_events", "method_used")
+           "restitution_critical", "rotor_speed_ratio", "n_steps", "n_rejected", "n_events",
+           "method_used")
 METHOD = ("integrator", "rtol", "atol", "dt", "max_impacts", "tol")
 #: auto without a closed form: DOPRI5 at atol = rtol (psi and psi' are O(1), so the absolute
 #: error is set on that scale, H5) and rtol = tol x a factor calibrated on 360 random rotor
@@ -33,8 +34,8 @@ TOOL_ROTOR_STOP, TOOL_LAB_WINDOW = 0, 1
 LAB_HORIZON = 200.0 * math.pi  # rotor radians without a contact: regime no_impact
 # case row: regime, amplitude, n, impact interval [rotor rad], striker normal speed at
 # impact [omega1 l2], impacts to converge, peak |psi''| [omega1^2], R_crit, steps, events,
-# method used, mean rotor speed [omega1]
-N_ROW = 12
+# method used, mean rotor speed [omega1], rejected steps
+N_ROW = 13
 _REGIME_CODES = np.arange(len(pd.REGIMES), dtype=np.float64)
 _STATUS = (st.OK, st.ESCAPE, st.MAX_STEPS, st.STEP_UNDERFLOW, st.DEGENERATE)
 
@@ -53,8 +54,9 @@ def steady_case(case, integrator, rtol, atol, dt, max_impacts, row):
     model, k, xi, kappa, r = int(case[0]), case[1], case[2], case[3], case[4]
     tool = int(case[5])
     if model != MODEL_ROTOR and tool == TOOL_ROTOR_STOP:
-        code = pd.dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt,
-                                max_impacts, row[:11])
+        row[12] = 0.0
+        code = pd.steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt,
+                               max_impacts, row[:11], row[12:])
         row[4] = 1.0 + k + row[4]  # pre-impact psi' -> striker normal speed
         row[11] = 1.0
         return code
@@ -146,6 +148,7 @@ def pendulum_run(params, method):
     out[8] = d[7]
     out[9] = d[11]
     out[10] = d[8]
-    out[11] = d[9]
-    out[12] = d[10]
+    out[11] = d[12]
+    out[12] = d[9]
+    out[13] = d[10]
     return out, case_status[index], np.empty((0, params.shape[1], 0))

@@ -22,6 +22,7 @@ from numba import njit
 from kernels import KERNEL_OPTIONS
 from kernels import status as st
 from kernels.crank_rocker import branch_values, impact_branch
+from kernels.elementary import golden_points, golden_shrink
 from kernels.fourbar import CHANGE_POINT_B, crank_turns_fully, vector_kinematics
 
 PARAMETERS = ("lambda2", "lambda3", "mu4", "mu5", "beta", "delta", "direction", "omega1",
@@ -82,6 +83,36 @@ def _impact_angle(target, lam6, lam2, lam3, offset, snap):
 
 
 @njit(**KERNEL_OPTIONS)
+def _transfer(phi, lam6, lam2, lam3, mu6, mu4, mu5, sigma2, offset, tol):
+    """(u51, u'51) at crank angle phi: stage 1 on its smooth path, stage 2 on sigma2."""
+    phi3, u31, du31 = stage1(phi, lam6, lam2, lam3, tol)
+    c1, s1, c2, s2, c3, s3, u21, u53, du21, du53 = vector_kinematics(
+        phi3 + offset, mu6, 1.0, mu4, mu5, sigma2, tol)
+    return u31 * u53, du31 * u53 + u31 * u31 * du53
+
+
+@njit(**KERNEL_OPTIONS)
+def _refine_peak(which, a, b, sampled, lam6, lam2, lam3, mu6, mu4, mu5, sigma2, offset, tol):
+    """Golden section for the maximum of |u51| (which = 0) or |u'51| (1) on [a, b], to 1e-10
+    of the interval; never below the sampled maximum (a jump at an impact is covered by
+    the exact one-sided values)."""
+    def value(phi):
+        u51, du51 = _transfer(phi, lam6, lam2, lam3, mu6, mu4, mu5, sigma2, offset, tol)
+        v = abs(u51) if which == 0 else abs(du51)
+        return v if math.isfinite(v) else -1.0
+
+    c, d = golden_points(a, b)
+    fc, fd = value(c), value(d)
+    while b - a > 1e-10 * (1.0 + abs(a)):
+        a, b, c, d, fc, fd, left = golden_shrink(a, b, c, d, fc, fd)
+        if left:
+            fc = value(c)
+        else:
+            fd = value(d)
+    return max(sampled, fc, fd)
+
+
+@njit(**KERNEL_OPTIONS)
 def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
            prof_angles, out, prof):
     nan = math.nan
@@ -126,20 +157,25 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
         out[11 + j] = abs(u51) * w * mu5 * lam3 * l1
         peak = max(peak, abs(u51), abs(u31 * after53))
 
-    # peaks of |u51| and |u'51| on a uniform sample of the 4 pi cycle (nodes excluded)
+    # peaks of |u51| and |u'51|: a uniform sample of the 4 pi cycle (nodes excluded) finds
+    # each maximum's basin, golden section on the exact kinematics refines it
     peak2 = 0.0
     n = 2 * (n_samples // 2)
+    spacing = 2.0 * TWO_PI / n
+    where1 = where2 = 0.0
     for j in range(n):
-        phi = 2.0 * TWO_PI * (j + 0.5) / n
-        phi3, u31, du31 = stage1(phi, lam6, lam2, lam3, tol)
-        c1, s1, c2, s2, c3, s3, u21, u53, du21, du53 = vector_kinematics(
-            phi3 + offset, mu6, 1.0, mu4, mu5, sigma2, tol)
-        u51 = u31 * u53
-        du51 = du31 * u53 + u31 * u31 * du53
-        if math.isfinite(u51):
-            peak = max(peak, abs(u51))
-        if math.isfinite(du51):
-            peak2 = max(peak2, abs(du51))
+        phi = spacing * (j + 0.5)
+        u51, du51 = _transfer(phi, lam6, lam2, lam3, mu6, mu4, mu5, sigma2, offset, tol)
+        if math.isfinite(u51) and abs(u51) > peak:
+            peak, where1 = abs(u51), phi
+        if math.isfinite(du51) and abs(du51) > peak2:
+            peak2, where2 = abs(du51), phi
+    if where1 != 0.0:
+        peak = _refine_peak(0, where1 - spacing, where1 + spacing, peak, lam6, lam2, lam3,
+                            mu6, mu4, mu5, sigma2, offset, tol)
+    if where2 != 0.0:
+        peak2 = _refine_peak(1, where2 - spacing, where2 + spacing, peak2, lam6, lam2, lam3,
+                             mu6, mu4, mu5, sigma2, offset, tol)
     out[13], out[14] = peak, peak2
 
     for j in range(prof_angles.shape[0]):

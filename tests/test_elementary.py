@@ -32,3 +32,27 @@ def test_atan2_fast_quadrants_and_accuracy():
     for a, b in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, -1.0),
                  (-1.0, -1.0), (0.0, 0.0), (1e-300, 1.0), (1.0, 1e-300)]:
         assert atan2_fast(a, b) == pytest.approx(math.atan2(a, b), abs=4e-16)
+
+
+def test_golden_section_finds_a_maximum_with_one_evaluation_per_step():
+    from kernels.elementary import golden_points, golden_shrink
+    calls = []
+
+    def f(x):
+        calls.append(x)
+        return -(x - 0.3) ** 2
+
+    a, b = -1.0, 2.0
+    c, d = golden_points(a, b)
+    fc, fd = f(c), f(d)
+    steps = 0
+    while b - a > 1e-10:
+        a, b, c, d, fc, fd, left = golden_shrink(a, b, c, d, fc, fd)
+        if left:
+            fc = f(c)
+        else:
+            fd = f(d)
+        steps += 1
+    assert abs(0.5 * (a + b) - 0.3) < 1e-10
+    assert len(calls) == steps + 2  # one new evaluation per step
+    assert steps == math.ceil(math.log(1e-10 / 3.0) / math.log(0.5 * (math.sqrt(5) - 1)))

@@ -387,3 +387,16 @@ def test_distinct_rows_equals_the_exact_sort_and_survives_a_hash_collision(monke
     monkeypatch.setattr(kr, "row_hashes", lambda k: np.zeros(len(k), dtype=np.uint64))
     cases, index = kr.distinct_rows(keys)  # every row collides: the exact fallback
     np.testing.assert_array_equal(cases[index], keys)
+
+
+def test_counters_steps_rejected_events():
+    """Per-point counters: RK4 rejects nothing, DOPRI5 rejects some of its attempts, the
+    closed form integrates nothing; every integrated steady state counts its flights."""
+    for c in (case(), case(model=kr.MODEL_ROTOR, k=1.0, kappa=1.2),
+              case(model=pd.MODEL_RIGID, k=1.0, kappa=1.2, tool=kr.TOOL_LAB_WINDOW)):
+        _, rk4 = steady(c, pd.INTEGRATOR_RK4, dt=0.01)
+        _, dopri = steady(c, pd.INTEGRATOR_DOPRI5, rtol=1e-6, atol=1e-8)
+        assert rk4[12] == 0 and rk4[8] > 0 and rk4[9] >= 1
+        assert 0 < dopri[12] < dopri[8] and dopri[9] >= 1
+    _, closed = steady(case(), pd.INTEGRATOR_CLOSED)
+    assert closed[8] == closed[9] == closed[12] == 0

@@ -105,8 +105,9 @@ METHOD = {
     "quadrature_points": Parameter("quadrature_points", "1", "Gauss-Legendre points for the "
                                    "cycle work and RMS", default=200, minimum=2,
                                    maximum=5000, integer=True),
-    "peak_samples": Parameter("peak_samples", "1", "crank angles sampled for the peaks",
-                              default=1441, minimum=3, maximum=10**6, integer=True),
+    "peak_samples": Parameter("peak_samples", "1", "crank angles sampled to find each "
+                              "peak, which is then refined to the exact maximum",
+                              default=361, minimum=3, maximum=10**6, integer=True),
     "profile_points": Parameter("profile_points", "1", "crank angles of the profiles "
                                 "(0: no profiles)", default=0, minimum=0, maximum=100000,
                                 integer=True),
@@ -136,8 +137,9 @@ register(Mechanism(
     method=METHOD,
     method_text="Assur-dyad vector route for the reactions (linkages.md §5.3), balancing "
                 "moment by virtual work (§5.5), loop closure in factored form (§2.1); "
-                "cycle work and RMS by Gauss-Legendre on the open cycle, peaks on a uniform "
-                "sample outside the special-position window",
+                "cycle work and RMS by Gauss-Legendre on the open cycle, peaks from a "
+                "uniform sample outside the special-position window refined by golden "
+                "section",
     check=_check,
     profiles=PROFILES,
     profile_dim=Parameter("crank_angle", "rad", "crank angle (phi1), from A->D"),

@@ -62,6 +62,7 @@ OUTPUTS = (
     Output("rotor_speed_ratio", "1", "mean rotor speed over the steady cycle over omega1 "
            "(1 at constant rotor speed)"),
     Output("n_steps", "1", "integration steps, accepted and rejected (0: closed form)"),
+    Output("n_rejected", "1", "rejected integration steps among n_steps"),
     Output("n_events", "1", "impact events located by the integrator"),
     Output("method_used", "1", "method that produced the values",
            flags=("closed_form", "rk4", "dopri5")),

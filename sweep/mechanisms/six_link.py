@@ -56,8 +56,9 @@ assert tuple(o.name for o in PROFILES) == k.PROFILES
 
 METHOD = {
     "geometry_tol": geometry_tol("the link-length conditions"),
-    "samples": Parameter("samples", "1", "crank angles sampled over 4 pi for the peaks",
-                         default=2880, minimum=8, maximum=10**6, integer=True),
+    "samples": Parameter("samples", "1", "crank angles sampled over 4 pi to find each "
+                         "peak, which is then refined to the exact maximum", default=720,
+                         minimum=8, maximum=10**6, integer=True),
     "profile_points": Parameter("profile_points", "1", "crank angles of the rocker_angle "
                                 "profile over 4 pi (0: none)", default=0, minimum=0,
                                 maximum=100000, integer=True),
@@ -74,8 +75,8 @@ register(Mechanism(
     method=METHOD,
     method_text="stage 1 on the smooth path through its node (branch alternation rule, "
                 "linkages.md §4.3), stage 2 on the impact branch for the rotation direction; "
-                "impacts by bisection on phi3(phi1); composition u51 = u31 u53; peaks on a "
-                "uniform sample of the 4 pi cycle",
+                "impacts by bisection on phi3(phi1); composition u51 = u31 u53; peaks from a "
+                "uniform sample of the 4 pi cycle refined by golden section",
     profiles=PROFILES,
     profile_dim=Parameter("crank_angle", "rad", "crank angle (phi1) over the 4 pi cycle"),
     profile_coordinate=lambda method: k.profile_angles(int(method["profile_points"])),
