@@ -77,7 +77,7 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
         raise UserError(f"output: {chart_path} exists; use --force to overwrite it")
 
     started = time.perf_counter()
-    done = atlas.run_sweep(sweep_spec, target, chunk=chunk or sweep_spec.run.chunk,
+    done = atlas.run_sweep(sweep_spec, target, chunk=chunk,
                            progress=not quiet, workers=workers or sweep_spec.run.workers,
                            resume=resume, force=force,
                            scheduler=scheduler or sweep_spec.run.scheduler)

@@ -18,6 +18,9 @@ from sweep.atlas import annotate
 from sweep.spec import Sweep
 
 
+MIN_BLOCKS = 8
+
+
 def choose_chunks(shape: tuple[int, ...], target: int) -> tuple[int, ...]:
     """Balanced chunk shape with about ``target`` points: small axes whole, the budget left
     spread evenly over the large ones, so slices along any axis read few chunks."""
@@ -85,6 +88,10 @@ class Plan:
         # a block's memory grows with the profile length: keep it near the requested size
         per_point = self.n_out + 1 + self.n_prof * n_ang
         target = max(1, (chunk or sweep.run.chunk) * (self.n_out + 1) // per_point)
+        if chunk is None and "chunk" not in sweep.run.model_fields_set:
+            # at least MIN_BLOCKS blocks, so that a small grid of an expensive mechanism
+            # (an integrated pendulum: ~1 ms a point) still keeps every core busy
+            target = min(target, max(1, -(-math.prod(self.shape) // MIN_BLOCKS)))
         self.chunk_shape = choose_chunks(self.shape, target)
         self.chunks = da.core.normalize_chunks(self.chunk_shape, self.shape)
         self.rows = per_point
