@@ -21,14 +21,19 @@ from sweep.spec import Sweep
 MIN_BLOCKS = 8
 
 
-def choose_chunks(shape: tuple[int, ...], target: int) -> tuple[int, ...]:
-    """Balanced chunk shape with about ``target`` points: small axes whole, the budget left
-    spread evenly over the large ones, so slices along any axis read few chunks."""
+def choose_chunks(shape: tuple[int, ...], target: int,
+                  whole: tuple[int, ...] = ()) -> tuple[int, ...]:
+    """Balanced chunk shape with about ``target`` points: the ``whole`` axes and small axes
+    whole, the budget left spread evenly over the large ones, so slices along any axis read
+    few chunks."""
     chunk = [1] * len(shape)
     budget = max(1, target)
-    order = sorted(range(len(shape)), key=lambda i: shape[i])
+    for dim in whole:
+        chunk[dim] = shape[dim]
+        budget = max(1, budget // shape[dim])
+    order = [i for i in sorted(range(len(shape)), key=lambda i: shape[i]) if i not in whole]
     for rank, dim in enumerate(order):
-        share = budget ** (1.0 / (len(shape) - rank))
+        share = budget ** (1.0 / (len(order) - rank))
         c = max(1, min(shape[dim], int(math.floor(share + 1e-9))))
         chunk[dim] = c
         budget = max(1, budget // c)
@@ -92,7 +97,9 @@ class Plan:
             # at least MIN_BLOCKS blocks, so that a small grid of an expensive mechanism
             # (an integrated pendulum: ~1 ms a point) still keeps every core busy
             target = min(target, max(1, -(-math.prod(self.shape) // MIN_BLOCKS)))
-        self.chunk_shape = choose_chunks(self.shape, target)
+        whole = tuple(d for d, axis in enumerate(sweep.axes)
+                      if axis.parameter.name in sweep.mechanism.whole_axes)
+        self.chunk_shape = choose_chunks(self.shape, target, whole)
         self.chunks = da.core.normalize_chunks(self.chunk_shape, self.shape)
         self.rows = per_point
 

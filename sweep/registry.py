@@ -103,6 +103,9 @@ class Mechanism:
     profiles: tuple[Output, ...] = ()
     profile_dim: Parameter | None = None
     profile_coordinate: Callable[[dict], np.ndarray] | None = None  # method -> coordinate
+    #: grid axes kept whole inside every block: the kernel solves once per block for all
+    #: their values and rescales (the pendulum's omega1 and l2)
+    whole_axes: tuple[str, ...] = ()
 
     def parameter(self, name: str) -> Parameter:
         for p in self.parameters:

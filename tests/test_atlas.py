@@ -207,3 +207,18 @@ def test_resume_refuses_a_different_code_version(tmp_path, monkeypatch):
     monkeypatch.setattr(atlas, "code_version", lambda: "9.9.9+git.other")
     with pytest.raises(UserError, match="different code version"):
         atlas.run_sweep(s, target, chunk=50, progress=False, resume=True)
+
+
+def test_small_grids_get_several_blocks_and_time_scale_axes_stay_whole():
+    """Without an explicit chunk a grid is cut into at least MIN_BLOCKS blocks, so a small
+    grid of an expensive mechanism uses every core; axes a mechanism rescales instead of
+    solving again (the pendulum's omega1, l2) stay whole in every block."""
+    from sweep import engine, spec
+    s = spec.parse('mechanism = "rotary_pendulum"\n[grid]\nk = {start = 1.0, stop = 2.5, '
+                   'num = 40}\nomega1 = [20.0, 40.0, 60.0]')
+    plan = engine.Plan(s)
+    assert plan.n_blocks >= engine.MIN_BLOCKS and plan.chunk_shape[1] == 3
+    explicit = spec.parse('mechanism = "rotary_pendulum"\n[run]\nchunk = 1000\n[grid]\n'
+                          'k = {start = 1.0, stop = 2.5, num = 40}\nomega1 = [20.0, 40.0]')
+    assert engine.Plan(explicit).n_blocks == 1  # a chunk the user gave is kept
+    assert engine.choose_chunks((40, 3, 5), 30, whole=(1,)) == (3, 3, 3)

@@ -135,4 +135,5 @@ register(Mechanism(
                 "after plastic or accumulated (Zeno) contact; computed once per distinct "
                 "case and rescaled by omega1 and l2",
     check=_check,
+    whole_axes=("omega1", "l2"),
 ))
