@@ -303,7 +303,7 @@ def turning_value(h, y0, d0, y1, d1):
     """psi at the turning point of the step's interpolant (psi' = d0 and d1 at the ends of
     opposite signs), by bisection on the interpolant's slope."""
     lo, hi = 0.0, h
-    for _ in range(80):
+    for _ in range(55):  # 2^-55 h: below round-off
         mid = 0.5 * (lo + hi)
         if (hermite_slope(mid, h, y0, d0, y1, d1) < 0.0) == (d0 < 0.0):
             lo = mid
@@ -418,7 +418,7 @@ def _first_crossing(h, y0, d0, y1, d1, level, upward):
 
 
 @njit(**KERNEL_OPTIONS)
-def _refine_peak(model, best, window, k, xi, kappa, method, exact):
+def _refine_peak(model, best, window, k, xi, kappa, method, exact, rtol):
     """Golden-section search for max |psi''| over the two steps around the largest step-end
     value (a smooth maximum lies within a step of its best sample), cut at the event
     (``window`` from the first step's start). Each point is an exact partial step from the
@@ -434,11 +434,13 @@ def _refine_peak(model, best, window, k, xi, kappa, method, exact):
             return abs(attempt_step(model, a0, a1, af, s, k, xi, kappa, method, 1.0, 1.0)[2])
         return abs(attempt_step(model, b0, b1, bf, s - h, k, xi, kappa, method, 1.0, 1.0)[2])
 
-    # golden section to 1e-7 of the window: its O(d^2) cost in the value is round-off
+    # golden section: a location error d costs about d^2 in the relative value (psi''
+    # varies on the scale of a rotor radian), so stop at d = sqrt(rtol)/3: a tenth of rtol
+    stop = max(1e-7 * window, 0.3 * math.sqrt(rtol))
     lo, hi = 0.0, window
     c, d = golden_points(lo, hi)
     fc, fd = accel_at(c), accel_at(d)
-    while hi - lo > 1e-7 * window:
+    while hi - lo > stop:
         lo, hi, c, d, fc, fd, left = golden_shrink(lo, hi, c, d, fc, fd)
         if left:
             fc = accel_at(c)
@@ -464,7 +466,8 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
     Returns (status, tau of the event, psi' there, amplitude, peak |psi''|, steps, rejected).
     The event time is found on the step interpolant and polished by secant iterations on
     exact partial steps from the step start (atol-limited event times, H5). Without
-    refine_peak (transient flights) the peak is only the largest value at step ends.
+    refine_peak (transient flights) the peak and the amplitude are only the extreme values
+    at step ends.
     """
     t, y0, y1 = 0.0, psi0, dpsi0
     f0 = acceleration(model, y0, y1, k, xi, kappa)
@@ -513,10 +516,10 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
             peak = max(peak, abs(pf))
             if refine_peak:
                 peak = _refine_peak(model, best, min(2.0 * best[6], t + s - best_t), k, xi,
-                                    kappa, method, peak)
+                                    kappa, method, peak, rtol)
             return status, t + s, p1, -lowest, peak, steps, rejected
         # the lowest point and the peak acceleration, refined on this step's interpolant
-        if y1 < 0.0 <= n1:
+        if refine_peak and y1 < 0.0 <= n1:  # transient flights need no amplitude
             lowest = min(lowest, turning_value(h, y0, y1, n0, n1) - psi0)
         lowest = min(lowest, n0 - psi0)
         if abs(fn) > peak:

@@ -174,7 +174,7 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
             if abs(p0) <= window:
                 peak = max(peak, abs(pf))
                 peak = _refine_peak(model, best, min(2.0 * best[6], t + s - best_t), k, xi,
-                                    kappa, method, peak)
+                                    kappa, method, peak, rtol)
                 amp = max(amp, abs(p0))
                 return (LAB_CONTACT, t + s, p0, p1, level, 1.0 if up else -1.0, passes,
                         amp, peak, steps, rejected)
