@@ -263,6 +263,22 @@ def _constraint_psi(level, tau, psi_guess, k):
 
 
 @njit(**KERNEL_OPTIONS)
+def flight_outcome(status, n_sec, steps, events, regimes, out):
+    """What a blade flight's status means for the steady-state search: -1 to go on (a
+    contact), else the kernel's return code, with out filled (escape, no_impact, failure)."""
+    out[8], out[9] = steps, events
+    if status == LAB_CONTACT:
+        return -1
+    if status == LAB_ESCAPE:
+        out[0], out[5] = regimes[3], n_sec
+        return 1
+    if status == LAB_NO_IMPACT:
+        out[0], out[5] = regimes[5], n_sec
+        return 0
+    return 3 if status == LAB_UNDERFLOW else 2
+
+
+@njit(**KERNEL_OPTIONS)
 def lab_steady(model, k, xi, kappa, r, window, method, rtol, atol, dt, max_impacts,
                horizon, regimes, out, impact_log):
     """Impact sequence on the lab-fixed blade to the steady regime.
@@ -344,15 +360,9 @@ def lab_steady(model, k, xi, kappa, r, window, method, rtol, atol, dt, max_impac
         amp_since, peak_since = max(amp_since, amp), max(peak_since, peak)
         flight_time = t_new - t
         t = t_new
-        if status == LAB_ESCAPE:
-            out[0], out[5], out[8], out[9] = regimes[3], n_sec, steps, events
-            return 1
-        if status == LAB_NO_IMPACT:
-            out[0], out[5], out[8], out[9] = regimes[5], n_sec, steps, events
-            return 0
-        if status != LAB_CONTACT:
-            out[8], out[9] = steps, events
-            return 3 if status == LAB_UNDERFLOW else 2
+        code = flight_outcome(status, n_sec, steps, events, regimes, out)
+        if code >= 0:
+            return code
         gdot = 1.0 + h_ratio(psi, k) * dpsi
     out[8], out[9] = steps, events
     if not finished:

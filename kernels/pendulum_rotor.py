@@ -121,13 +121,14 @@ def _step(method, y, f0, h, k, xi, j1, slope, idle, stages, work, y_new, f_new):
 
 @njit(**KERNEL_OPTIONS)
 def _error_norm(y, y_new, stages, rtol, atol):
-    """RMS of the DOPRI5 error over (phi1', psi, psi') scaled by atol + rtol |y|; phi1 only
-    grows and its increments are what matters, so it does not steer the step."""
-    total = 0.0
+    """RMS of the DOPRI5 error over (phi1, phi1', psi, psi') scaled by atol + rtol |y|; phi1
+    grows without bound and what matters is its error per step (a lab-fixed blade sits at
+    a rotor angle), so it is scaled as a variable of size 1."""
+    total = (stages[6, 0] / (atol + rtol)) ** 2
     for i in range(1, 4):
         sc = atol + rtol * max(abs(y[i]), abs(y_new[i]))
         total += (stages[6, i] / sc) ** 2
-    return math.sqrt(total / 3.0)
+    return math.sqrt(total / 4.0)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -144,6 +145,19 @@ def rotor_integrate_to(w, psi, dpsi, tau_end, k, xi, j1, motor_slope, idle, dt):
         y[:] = y_new
         f0[:] = f_new
     return y[1], y[2], y[3]
+
+
+@njit(**KERNEL_OPTIONS)
+def keep_peak(peak, y, f0, y_new, f_new, best_a, best_fa, best_b, best_fb):
+    """If the step ending at y_new has the largest |psi''| so far, keep its start and end
+    (where to refine the peak); returns (peak, kept)."""
+    if abs(f_new[3]) <= peak:
+        return peak, False
+    best_a[:] = y
+    best_fa[:] = f0
+    best_b[:] = y_new
+    best_fb[:] = f_new
+    return abs(f_new[3]), True
 
 
 @njit(**KERNEL_OPTIONS)
@@ -219,12 +233,8 @@ def rotor_flight(y, k, xi, j1, slope, idle, method, rtol, atol, dt, max_steps, r
             _step(method, y, f0, 0.5 * (lo + hi), k, xi, j1, slope, idle, stages, work, part,
                   f_part)
             lowest = min(lowest, part[2])
-        if abs(f_new[3]) > peak:
-            peak = abs(f_new[3])
-            best_a[:] = y
-            best_fa[:] = f0
-            best_b[:] = y_new
-            best_fb[:] = f_new
+        peak, kept = keep_peak(peak, y, f0, y_new, f_new, best_a, best_fa, best_b, best_fb)
+        if kept:
             best_h, best_t = h, t
         t += h
         y[:] = y_new

@@ -12,6 +12,7 @@ from kernels import pendulum as pd
 from kernels import status as st
 from kernels.pendulum_lab import lab_steady
 from kernels.pendulum_rotor import METHOD_DOPRI5, METHOD_RK4, rotor_steady
+from kernels.pendulum_rotor_lab import rotor_lab_steady
 
 PARAMETERS = ("model", "k", "xi", "kappa", "R", "omega1", "l2", "tool", "tool_window",
               "rotor_inertia_ratio", "motor_slope", "idle_speed")
@@ -62,7 +63,12 @@ def steady_case(case, integrator, rtol, atol, dt, max_impacts, row):
         return code
     method = METHOD_RK4 if integrator == pd.INTEGRATOR_RK4 else METHOD_DOPRI5
     row[10] = pd.USED_RK4 if method == METHOD_RK4 else pd.USED_DOPRI5
-    if model == MODEL_ROTOR:
+    if model == MODEL_ROTOR and tool == TOOL_LAB_WINDOW:
+        log = np.empty((1, 2))
+        code = rotor_lab_steady(k, xi, kappa, r, case[6], case[7], case[8], case[9], method,
+                                rtol, atol, dt, int(max_impacts), LAB_HORIZON,
+                                _REGIME_CODES, row, log)
+    elif model == MODEL_ROTOR:
         code = rotor_steady(k, xi, kappa, r, case[7], case[8], case[9], method, rtol, atol,
                             dt, int(max_impacts), _REGIME_CODES, row)
     else:

@@ -207,7 +207,6 @@ def test_P_O12_omega1_is_a_time_scale_and_is_not_integrated_again(monkeypatch):
 
 
 @pytest.mark.parametrize("text, key", [
-    ('[fixed]\nmodel = "rotor"\ntool = "lab_window"', "tool"),
     ('[fixed]\ntool_window = 0.3', "tool_window"),
     ('[fixed]\ntool = "lab_window"\ntool_window = 2.0', "fixed.tool_window"),
     ('[fixed]\nmotor_slope = 3.0', "motor_slope"),

@@ -400,3 +400,153 @@ def test_counters_steps_rejected_events():
         assert 0 < dopri[12] < dopri[8] and dopri[9] >= 1
     _, closed = steady(case(), pd.INTEGRATOR_CLOSED)
     assert closed[8] == closed[9] == closed[12] == 0
+
+
+class RotorLabReference:
+    """The rotor model on the blade with SciPy: 4-state flights (DOP853, rtol = atol =
+    1e-12) with terminal events on G = phi1 + beta(psi) at the faces, restarted after
+    each pass; the 2-DOF impulse written out with numpy; slides by integrating the
+    constrained dynamics (Lagrange multiplier) with events on the pressing and the edge."""
+
+    def __init__(self, k, kappa, r, window, j1, slope, idle=1.0, xi=XI):
+        self.k, self.r, self.w, self.xi, self.j1, self.s, self.idle = (
+            k, r, window, xi, j1, slope, idle)
+        self.lam = kappa * (1 + 1 / xi)
+        self.kc = k * self.lam
+
+    def mass(self, psi):
+        c, xi, kc = math.cos(psi), self.xi, self.kc
+        return np.array([[self.j1 + 1 + xi * (kc * kc + 1 + 2 * kc * c), 1 + xi * (1 + kc * c)],
+                         [1 + xi * (1 + kc * c), 1 + xi]])
+
+    def forces(self, w, psi, dpsi):
+        g = self.xi * self.kc * math.sin(psi)
+        return np.array([self.s * (self.idle - w) + g * (2 * w * dpsi + dpsi**2), -g * w * w])
+
+    def beta(self, psi):
+        return math.atan2(math.sin(psi), self.k + math.cos(psi))
+
+    def h(self, psi):
+        k = self.k
+        return (1 + k * math.cos(psi)) / (k * k + 1 + 2 * k * math.cos(psi))
+
+    def dh(self, psi):
+        e = 1e-6
+        return (self.h(psi + e) - self.h(psi - e)) / (2 * e)
+
+    def free_gap_acc(self, y):
+        acc = np.linalg.solve(self.mass(y[2]), self.forces(y[1], y[2], y[3]))
+        return acc[0] + self.h(y[2]) * acc[1] + self.dh(y[2]) * y[3] ** 2
+
+    def impact(self, y, r):
+        jac = np.array([1.0, self.h(y[2])])
+        x = np.linalg.solve(self.mass(y[2]), jac)
+        impulse = -(1 + r) * (jac @ y[[1, 3]]) / (jac @ x)
+        y[[1, 3]] += x * impulse
+
+    def constrained(self, psi, dpsi, level):
+        """psi'' on the face and the free G'' (3x3 KKT system of M q'' = Q + J^T lam)."""
+        hr = self.h(psi)
+        w = -hr * dpsi
+        kkt = np.zeros((3, 3))
+        kkt[:2, :2] = self.mass(psi)
+        kkt[:2, 2] = kkt[2, :2] = [-1.0, -hr]
+        rhs = np.concatenate([self.forces(w, psi, dpsi), [self.dh(psi) * dpsi**2]])
+        sol = np.linalg.solve(kkt, rhs)
+        y = np.array([level - self.beta(psi), w, psi, dpsi])
+        return sol[1], self.free_gap_acc(y)
+
+    def slide(self, t, y, level, side):
+        def ode(tau, z):
+            return [z[1], self.constrained(z[0], z[1], level)[0]]
+
+        def release(tau, z):
+            return side * self.constrained(z[0], z[1], level)[1]
+        release.terminal, release.direction = True, -1.0
+
+        def edge(tau, z):
+            return abs(z[0]) - self.w
+        edge.terminal, edge.direction = True, 1.0
+        dpsi = -y[1] / self.h(y[2])
+        sol = solve_ivp(ode, (t, t + 100), [y[2], dpsi], events=(release, edge), **TIGHT)
+        released = sol.t_events[0].size > 0 and (
+            sol.t_events[1].size == 0 or sol.t_events[0][0] < sol.t_events[1][0])
+        which = 0 if released else 1
+        psi, dpsi = sol.y_events[which][0]
+        hr = self.h(psi)
+        return released, sol.t_events[which][0], np.array(
+            [level - self.beta(psi), -hr * dpsi, psi, dpsi])
+
+    def rhs(self, tau, y):
+        acc = np.linalg.solve(self.mass(y[2]), self.forces(y[1], y[2], y[3]))
+        return [y[1], acc[0], y[3], acc[1]]
+
+    def run(self, sections, horizon=200 * math.pi):
+        t, y, level, side = 0.0, np.array([0.0, self.idle, 0.0, 0.0]), 0.0, 1.0
+        flight, phases = 1.0, []
+        while len(phases) < sections:
+            gdot = y[1] + self.h(y[2]) * y[3]
+            if flight >= pl.SECTION_MIN_FLIGHT:
+                phases.append(y[0] % (2 * math.pi))
+            assert abs(gdot) >= pl.SPEED_EPS or self.r == 0, "choose a case without chatter"
+            self.impact(y, self.r)
+            if self.r == 0 and side * self.free_gap_acc(y) > 0:
+                released, t, y = self.slide(t, y, level, side)
+                if not released:
+                    level, side = (level, 0.0) if side > 0 else (level - 2 * math.pi, 0.0)
+            lower = level - 2 * math.pi if side > 0 else level
+            t0 = t
+            while True:
+                up = lambda tau, z, L=lower + 2 * math.pi: z[0] + self.beta(z[2]) - L  # noqa
+                dn = lambda tau, z, L=lower: z[0] + self.beta(z[2]) - L  # noqa
+                up.terminal, up.direction = True, 1.0
+                dn.terminal, dn.direction = True, -1.0
+                g1 = y[1] + self.h(y[2]) * y[3]
+                g2 = self.free_gap_acc(y)
+                first = 0.25 * abs(g1 / g2) if g1 * g2 < 0 else None
+                sol = solve_ivp(self.rhs, (t, t0 + horizon), y, events=(up, dn),
+                                first_step=first, **TIGHT)
+                hits = [(sol.t_events[i][0], i, sol.y_events[i][0]) for i in (0, 1)
+                        if sol.t_events[i].size]
+                if not hits:
+                    return phases, "no_impact"
+                t, which, y = min(hits, key=lambda e: e[0])
+                y = y.copy()
+                face = lower + 2 * math.pi if which == 0 else lower
+                if abs(y[2]) <= self.w:
+                    level, side = face, (1.0 if which == 0 else -1.0)
+                    break
+                lower = face if which == 0 else lower - 2 * math.pi
+            flight = t - t0
+        return phases, "running"
+
+
+@pytest.mark.parametrize("j1, slope, window", [(30.0, 5.0, 0.45), (200.0, 50.0, 0.3)])
+def test_rotor_on_the_blade_matches_scipy(j1, slope, window):
+    """A rotor of finite inertia with a soft motor against the lab-fixed blade, R = 0: the
+    impulse changes the rotor speed, the slide is constrained dynamics, not kinematics. The
+    kernel's section impacts (rotor angle at each) match the independent SciPy system."""
+    from kernels import pendulum_rotor_lab as prl
+    ref_phases, _ = RotorLabReference(1.0, 1.2, 0.0, window, j1, slope).run(5)
+    row = np.empty(kr.N_ROW)
+    log = np.full((5, 2), np.nan)
+    prl.rotor_lab_steady(1.0, XI, 1.2, 0.0, window, j1, slope, 1.0, 1, 1e-11, 1e-13, 0.002,
+                         4, kr.LAB_HORIZON, np.arange(6.0), row, log)
+    n = int(np.sum(np.isfinite(log[:, 0])))
+    assert n >= 3
+    np.testing.assert_allclose(log[:n, 0], ref_phases[:n], atol=1e-6)
+
+
+def test_rotor_on_the_blade_tends_to_the_rigid_model():
+    """With short flights (blade reach 0.45: one impact per 8 turns) the rotor model's
+    steady state on the blade tends to the rigid one as rotor inertia and motor slope grow;
+    the phase drift of long flights grows like (flight time)^2 / j1."""
+    rigid = steady(case(model=pd.MODEL_RIGID, k=1.0, kappa=1.2, tool=kr.TOOL_LAB_WINDOW,
+                        window=0.45))[1]
+    gaps = []
+    for size in (1e6, 1e8):
+        code, row = steady(case(model=kr.MODEL_ROTOR, k=1.0, kappa=1.2,
+                                tool=kr.TOOL_LAB_WINDOW, window=0.45, j1=size, slope=size))
+        assert code == 0 and row[0] == rigid[0] and row[3] == pytest.approx(rigid[3])
+        gaps.append(max(abs(row[j] / rigid[j] - 1) for j in (1, 4, 6)))
+    assert gaps[1] < gaps[0] / 30 and gaps[1] < 1e-5  # first order: 1.2e-4, then 1.6e-6

@@ -94,9 +94,6 @@ assert tuple(METHOD) == kr.METHOD
 def _check(given: dict) -> None:
     models = given.get("model", {"paper"})
     tools = given.get("tool", {"rotor_stop"})
-    if "rotor" in models and "lab_window" in tools:
-        raise UserError("tool: \"lab_window\" is built for the constant-speed models "
-                        "(paper, rigid); with model = \"rotor\" use \"rotor_stop\"")
     if "kappa" in given and models == {"paper"}:
         raise UserError("kappa: used only by model = \"rigid\" or \"rotor\"")
     if "tool_window" in given and "lab_window" not in tools:
