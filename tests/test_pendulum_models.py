@@ -550,3 +550,25 @@ def test_rotor_on_the_blade_tends_to_the_rigid_model():
         assert code == 0 and row[0] == rigid[0] and row[3] == pytest.approx(rigid[3])
         gaps.append(max(abs(row[j] / rigid[j] - 1) for j in (1, 4, 6)))
     assert gaps[1] < gaps[0] / 30 and gaps[1] < 1e-5  # first order: 1.2e-4, then 1.6e-6
+
+
+def test_rotor_on_the_blade_chatters_like_the_rigid_model_in_the_limit():
+    """The rotor model's chatter path (bounces, the Zeno guard's plastic accumulation, the
+    constrained slide) against the rigid model's, which SciPy checks above: the section
+    impacts converge at first order in 1/J1 (chatter amplifies the rotor's O(1/J1)
+    reaction, so the constant is large)."""
+    from kernels import pendulum_rotor_lab as prl
+    k, kappa, r, window = 0.926, 25.32, 0.363, 1.463
+    _, _, rigid = lab_log(case(model=pd.MODEL_RIGID, k=k, kappa=kappa, r=r,
+                               tool=kr.TOOL_LAB_WINDOW, window=window), 5)
+    gaps = []
+    for size in (1e6, 1e8):
+        row = np.empty(kr.N_ROW)
+        log = np.full((5, 2), np.nan)
+        prl.rotor_lab_steady(k, XI, kappa, r, window, size, size, 1.0, 1, 1e-11, 1e-13,
+                             0.002, 4, kr.LAB_HORIZON, np.arange(6.0), row, log)
+        gaps.append(np.max(np.abs(log[:5, 0] - rigid[:5, 0])))
+    assert gaps[1] < gaps[0] / 30 and gaps[1] < 1e-4
+    code, row = steady(case(model=kr.MODEL_ROTOR, k=k, kappa=kappa, r=r,
+                            tool=kr.TOOL_LAB_WINDOW, window=window, j1=1e8, slope=1e8))
+    assert code == 0 and row[0] == REG["chatter"]  # the accumulation is in every cycle
