@@ -291,6 +291,15 @@ def next_step(h, err, after_reject, err_prev=1.0):
 
 
 @njit(**KERNEL_OPTIONS)
+def accepted_step_size(method, h, dt, err, after_reject, err_prev):
+    """The next step after an accepted one: (h, err_prev) from the DOPRI5 controller, or dt
+    for RK4 (a first step cut short by the ballistic-return cap is the only short one)."""
+    if method == METHOD_DOPRI5:
+        return next_step(h, err, after_reject, err_prev), err
+    return dt, err_prev
+
+
+@njit(**KERNEL_OPTIONS)
 def hermite_slope(s, h, y0, d0, y1, d1):
     """Derivative of the cubic Hermite interpolant at s in [0, h]."""
     t = s / h
@@ -528,11 +537,7 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
             best_t = t
         t += h
         y0, y1, f0 = n0, n1, fn
-        if method == METHOD_DOPRI5:
-            h = next_step(h, err, after_reject, err_prev)
-            err_prev = err
-        else:
-            h = dt  # a first step cut short by the ballistic-return cap is the only one
+        h, err_prev = accepted_step_size(method, h, dt, err, after_reject, err_prev)
         after_reject = False
     return FLIGHT_MAX_STEPS, t, nan, nan, nan, steps, rejected
 

@@ -23,9 +23,9 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS
 from kernels.pendulum import (METHOD_DOPRI5, SUBSTEP_SAMPLES, _hermite, _refine_peak,
-                              acceleration, attempt_step, classify_period, hermite_slope,
-                              illinois, initial_step, interpolated_event, next_step,
-                              turning_value)
+                              accepted_step_size, acceleration, attempt_step,
+                              classify_period, hermite_slope, illinois, initial_step,
+                              interpolated_event, next_step, turning_value)
 
 LAB_CONTACT, LAB_ESCAPE, LAB_NO_IMPACT, LAB_MAX_STEPS, LAB_UNDERFLOW = 0, 1, 2, 3, 4
 SPEED_EPS = 1e-7  # Zeno guard: contact speeds G' below this accumulate (H6)
@@ -192,11 +192,7 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
             best_t = t
         t += h
         y0, y1, f0 = n0, n1, fn
-        if method == METHOD_DOPRI5:
-            h = next_step(h, err, after_reject, err_prev)
-            err_prev = err
-        else:
-            h = dt  # a first step cut short by the ballistic-return cap is the only one
+        h, err_prev = accepted_step_size(method, h, dt, err, after_reject, err_prev)
         after_reject = False
     return (LAB_MAX_STEPS, t, y0, y1, nan, 0.0, passes, amp, peak, steps, rejected)
 

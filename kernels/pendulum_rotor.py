@@ -17,7 +17,8 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS
 from kernels.elementary import golden_points, golden_shrink
-from kernels.pendulum import _first_crossing, classify_period
+from kernels.pendulum import (_first_crossing, accepted_step_size, classify_period,
+                              initial_step, next_step)
 
 FLIGHT_IMPACT, FLIGHT_ESCAPE, FLIGHT_MAX_STEPS, FLIGHT_UNDERFLOW = 0, 1, 2, 3
 METHOD_RK4, METHOD_DOPRI5 = 0, 1
@@ -179,7 +180,9 @@ def rotor_flight(y, k, xi, j1, slope, idle, method, rtol, atol, dt, max_steps, r
     _rhs(y, k, xi, j1, slope, idle, f0)
     best_h, best_t = 0.0, 0.0
     t = 0.0
-    h = dt if method == METHOD_RK4 else min(0.05, 0.01 / max(1.0, abs(y[3])))
+    h = initial_step(method, dt, y[3], rtol)
+    after_reject = False
+    err_prev = 1.0
     steps = rejected = 0
     lowest = 0.0
     peak = abs(f0[3])
@@ -190,7 +193,8 @@ def rotor_flight(y, k, xi, j1, slope, idle, method, rtol, atol, dt, max_steps, r
             err = _error_norm(y, y_new, stages, rtol, atol)
             if err > 1.0:
                 rejected += 1
-                h *= max(0.2, 0.9 * err ** -0.2)
+                h = next_step(h, err, True)
+                after_reject = True
                 if h < 1e-14 * max(1.0, t):
                     return FLIGHT_UNDERFLOW, t, math.nan, math.nan, steps, rejected
                 continue
@@ -239,8 +243,8 @@ def rotor_flight(y, k, xi, j1, slope, idle, method, rtol, atol, dt, max_steps, r
         t += h
         y[:] = y_new
         f0[:] = f_new
-        if method == METHOD_DOPRI5:
-            h *= min(5.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
+        h, err_prev = accepted_step_size(method, h, dt, err, after_reject, err_prev)
+        after_reject = False
     return FLIGHT_MAX_STEPS, t, math.nan, math.nan, steps, rejected
 
 

@@ -18,8 +18,8 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels.pendulum import (SUBSTEP_SAMPLES, _hermite, classify_period, hermite_slope,
-                              initial_step, next_step, turning_value)
+from kernels.pendulum import (SUBSTEP_SAMPLES, _hermite, accepted_step_size, classify_period,
+                              hermite_slope, initial_step, next_step, turning_value)
 from kernels.pendulum_lab import (LAB_CONTACT, LAB_ESCAPE, LAB_MAX_STEPS, LAB_NO_IMPACT,
                                   LAB_UNDERFLOW, SECTION_MIN_FLIGHT, SPEED_EPS, beta,
                                   flight_outcome, h_ratio, h_slope)
@@ -260,11 +260,7 @@ def rotor_lab_flight(y, lower, window, k, k_cm, xi, j1, slope, idle, method, rto
         t += h
         y[:] = y_new
         f0[:] = f_new
-        if method == METHOD_DOPRI5:
-            h = next_step(h, err, after_reject, err_prev)
-            err_prev = err
-        else:
-            h = dt
+        h, err_prev = accepted_step_size(method, h, dt, err, after_reject, err_prev)
         after_reject = False
     return LAB_MAX_STEPS, t, math.nan, 0.0, passes, amp, peak, steps, rejected
 
