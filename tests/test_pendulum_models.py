@@ -332,7 +332,7 @@ def test_lab_blade_chatter_accumulates_and_ends_as_scipy_does(model, k, kappa, r
     code, row, log = lab_log(c, 6)
     np.testing.assert_allclose(log[:, 0], ref_phases, atol=1e-6)
     code, row = steady(c)  # and the whole run ends, with a regime
-    assert code == 0 and row[0] in REG.values()
+    assert code == 0 and np.isfinite(row[0]) and row[9] > ref.contacts  # chatter counted
 
 
 @pytest.mark.parametrize("k, kappa, r, window, period", [
