@@ -291,6 +291,15 @@ def next_step(h, err, after_reject, err_prev=1.0):
 
 
 @njit(**KERNEL_OPTIONS)
+def track_peak(peak, best, best_t, t, h, y0, y1, f0, n0, n1, fn):
+    """Keep the step ending at the largest |psi''| so far (its start, end and length, and
+    its start time): where the peak is refined at the event."""
+    if abs(fn) > peak:
+        return abs(fn), (y0, y1, f0, n0, n1, fn, h), t
+    return peak, best, best_t
+
+
+@njit(**KERNEL_OPTIONS)
 def accepted_step_size(method, h, dt, err, after_reject, err_prev):
     """The next step after an accepted one: (h, err_prev) from the DOPRI5 controller, or dt
     for RK4 (a first step cut short by the ballistic-return cap is the only short one)."""
@@ -531,10 +540,7 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
         if refine_peak and y1 < 0.0 <= n1:  # transient flights need no amplitude
             lowest = min(lowest, turning_value(h, y0, y1, n0, n1) - psi0)
         lowest = min(lowest, n0 - psi0)
-        if abs(fn) > peak:
-            peak = abs(fn)
-            best = (y0, y1, f0, n0, n1, fn, h)
-            best_t = t
+        peak, best, best_t = track_peak(peak, best, best_t, t, h, y0, y1, f0, n0, n1, fn)
         t += h
         y0, y1, f0 = n0, n1, fn
         h, err_prev = accepted_step_size(method, h, dt, err, after_reject, err_prev)

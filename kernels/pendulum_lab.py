@@ -25,7 +25,7 @@ from kernels import KERNEL_OPTIONS
 from kernels.pendulum import (METHOD_DOPRI5, SUBSTEP_SAMPLES, _hermite, _refine_peak,
                               accepted_step_size, acceleration, attempt_step,
                               classify_period, hermite_slope, illinois, initial_step,
-                              interpolated_event, next_step, turning_value)
+                              interpolated_event, next_step, track_peak, turning_value)
 
 LAB_CONTACT, LAB_ESCAPE, LAB_NO_IMPACT, LAB_MAX_STEPS, LAB_UNDERFLOW = 0, 1, 2, 3, 4
 SPEED_EPS = 1e-7  # Zeno guard: contact speeds G' below this accumulate (H6)
@@ -186,10 +186,7 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
         amp = max(amp, abs(n0))
         if (y1 < 0.0) != (n1 < 0.0):  # a turning point inside the step
             amp = max(amp, abs(turning_value(h, y0, y1, n0, n1)))
-        if abs(fn) > peak:
-            peak = abs(fn)
-            best = (y0, y1, f0, n0, n1, fn, h)
-            best_t = t
+        peak, best, best_t = track_peak(peak, best, best_t, t, h, y0, y1, f0, n0, n1, fn)
         t += h
         y0, y1, f0 = n0, n1, fn
         h, err_prev = accepted_step_size(method, h, dt, err, after_reject, err_prev)

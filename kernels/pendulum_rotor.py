@@ -133,6 +133,15 @@ def _error_norm(y, y_new, stages, rtol, atol):
 
 
 @njit(**KERNEL_OPTIONS)
+def attempt(method, y, f0, h, k, xi, j1, slope, idle, rtol, atol, stages, work, y_new, f_new):
+    """One step into y_new, f_new; returns the DOPRI5 error norm (> 1: reject), 0 for RK4."""
+    _step(method, y, f0, h, k, xi, j1, slope, idle, stages, work, y_new, f_new)
+    if method == METHOD_DOPRI5:
+        return _error_norm(y, y_new, stages, rtol, atol)
+    return 0.0
+
+
+@njit(**KERNEL_OPTIONS)
 def rotor_integrate_to(w, psi, dpsi, tau_end, k, xi, j1, motor_slope, idle, dt):
     """RK4 with n = ceil(tau_end/dt) equal steps for the state (phi1', psi, psi')."""
     n = max(1, int(math.ceil(tau_end / dt - 1e-12)))
@@ -187,17 +196,15 @@ def rotor_flight(y, k, xi, j1, slope, idle, method, rtol, atol, dt, max_steps, r
     lowest = 0.0
     peak = abs(f0[3])
     while steps + rejected < max_steps:
-        _step(method, y, f0, h, k, xi, j1, slope, idle, stages, work, y_new, f_new)
-        err = 0.0
-        if method == METHOD_DOPRI5:
-            err = _error_norm(y, y_new, stages, rtol, atol)
-            if err > 1.0:
-                rejected += 1
-                h = next_step(h, err, True)
-                after_reject = True
-                if h < 1e-14 * max(1.0, t):
-                    return FLIGHT_UNDERFLOW, t, math.nan, math.nan, steps, rejected
-                continue
+        err = attempt(method, y, f0, h, k, xi, j1, slope, idle, rtol, atol, stages, work, y_new,
+                      f_new)
+        if err > 1.0:
+            rejected += 1
+            h = next_step(h, err, True)
+            after_reject = True
+            if h < 1e-14 * max(1.0, t):
+                return FLIGHT_UNDERFLOW, t, math.nan, math.nan, steps, rejected
+            continue
         steps += 1
         for event in range(2):  # escape first, then impact
             level = -math.pi if event == 0 else 0.0

@@ -23,8 +23,8 @@ from kernels.pendulum import (SUBSTEP_SAMPLES, _hermite, accepted_step_size, cla
 from kernels.pendulum_lab import (LAB_CONTACT, LAB_ESCAPE, LAB_MAX_STEPS, LAB_NO_IMPACT,
                                   LAB_UNDERFLOW, SECTION_MIN_FLIGHT, SPEED_EPS, beta,
                                   flight_outcome, h_ratio, h_slope)
-from kernels.pendulum_rotor import (METHOD_DOPRI5, _error_norm, _refine_peak, _rhs, _step,
-                                    keep_peak, rotor_accelerations, rotor_mass_matrix)
+from kernels.pendulum_rotor import (METHOD_DOPRI5, _refine_peak, _rhs, _step, attempt, keep_peak,
+                                    rotor_accelerations, rotor_mass_matrix)
 
 SLIDE_STEP = 1e-3  # RK4 step of the slide [rotor rad]: its error (~step^4) is round-off
 
@@ -205,17 +205,15 @@ def rotor_lab_flight(y, lower, window, k, k_cm, xi, j1, slope, idle, method, rto
     while steps + rejected < max_steps:
         if t > horizon:
             return LAB_NO_IMPACT, t, math.nan, 0.0, passes, amp, peak, steps, rejected
-        _step(method, y, f0, h, k_cm, xi, j1, slope, idle, stages, work, y_new, f_new)
-        err = 0.0
-        if method == METHOD_DOPRI5:
-            err = _error_norm(y, y_new, stages, rtol, atol)
-            if err > 1.0:
-                rejected += 1
-                h = next_step(h, err, True)
-                after_reject = True
-                if h < 1e-14 * max(1.0, t):
-                    return LAB_UNDERFLOW, t, math.nan, 0.0, passes, amp, peak, steps, rejected
-                continue
+        err = attempt(method, y, f0, h, k_cm, xi, j1, slope, idle, rtol, atol, stages, work,
+                      y_new, f_new)
+        if err > 1.0:
+            rejected += 1
+            h = next_step(h, err, True)
+            after_reject = True
+            if h < 1e-14 * max(1.0, t):
+                return LAB_UNDERFLOW, t, math.nan, 0.0, passes, amp, peak, steps, rejected
+            continue
         steps += 1
         if abs(y_new[2]) >= math.pi:
             y[:] = y_new
