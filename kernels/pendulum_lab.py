@@ -185,7 +185,8 @@ def lab_flight(model, t0, psi0, dpsi0, lower, window, k, xi, kappa, method, rtol
             continue
         amp = max(amp, abs(n0))
         if (y1 < 0.0) != (n1 < 0.0):  # a turning point inside the step
-            amp = max(amp, abs(turning_value(h, y0, y1, n0, n1)))
+            amp = max(amp, abs(turning_value(model, y0, y1, f0, h, n0, n1, k, xi, kappa,
+                                             method)))
         peak, best, best_t = track_peak(peak, best, best_t, t, h, y0, y1, f0, n0, n1, fn)
         t += h
         y0, y1, f0 = n0, n1, fn

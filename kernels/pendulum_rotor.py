@@ -18,7 +18,7 @@ from numba import njit
 from kernels import KERNEL_OPTIONS
 from kernels.elementary import golden_points, golden_shrink
 from kernels.pendulum import (_first_crossing, accepted_step_size, classify_period,
-                              initial_step, next_step)
+                              initial_step, next_step, turning_time)
 
 FLIGHT_IMPACT, FLIGHT_ESCAPE, FLIGHT_MAX_STEPS, FLIGHT_UNDERFLOW = 0, 1, 2, 3
 METHOD_RK4, METHOD_DOPRI5 = 0, 1
@@ -142,6 +142,24 @@ def attempt(method, y, f0, h, k, xi, j1, slope, idle, rtol, atol, stages, work, 
 
 
 @njit(**KERNEL_OPTIONS)
+def rotor_turning_value(method, y, f0, h, y_new, k, xi, j1, slope, idle, stages, work, part,
+                        f_part):
+    """psi at the turning point inside a step (psi' = 0), by Newton on exact partial steps
+    from the interpolant's estimate."""
+    s = turning_time(h, y[2], y[3], y_new[2], y_new[3])
+    for _ in range(4):
+        _step(method, y, f0, s, k, xi, j1, slope, idle, stages, work, part, f_part)
+        if f_part[3] == 0.0:
+            break
+        s_new = min(h, max(0.0, s - part[3] / f_part[3]))
+        if abs(s_new - s) <= 1e-15 * h:
+            break
+        s = s_new
+    _step(method, y, f0, s, k, xi, j1, slope, idle, stages, work, part, f_part)
+    return part[2]
+
+
+@njit(**KERNEL_OPTIONS)
 def rotor_integrate_to(w, psi, dpsi, tau_end, k, xi, j1, motor_slope, idle, dt):
     """RK4 with n = ceil(tau_end/dt) equal steps for the state (phi1', psi, psi')."""
     n = max(1, int(math.ceil(tau_end / dt - 1e-12)))
@@ -230,20 +248,9 @@ def rotor_flight(y, k, xi, j1, slope, idle, method, rtol, atol, dt, max_steps, r
             status = FLIGHT_ESCAPE if event == 0 else FLIGHT_IMPACT
             return status, t + s, -lowest, peak, steps, rejected
         lowest = min(lowest, y_new[2])
-        if y[3] < 0.0 <= y_new[3]:  # the turning point inside this step, by ternary search
-            lo, hi = 0.0, h
-            for _ in range(60):
-                m1, m2 = lo + (hi - lo) / 3.0, hi - (hi - lo) / 3.0
-                _step(method, y, f0, m1, k, xi, j1, slope, idle, stages, work, part, f_part)
-                p1 = part[2]
-                _step(method, y, f0, m2, k, xi, j1, slope, idle, stages, work, part, f_part)
-                if p1 < part[2]:
-                    hi = m2
-                else:
-                    lo = m1
-            _step(method, y, f0, 0.5 * (lo + hi), k, xi, j1, slope, idle, stages, work, part,
-                  f_part)
-            lowest = min(lowest, part[2])
+        if refine_peak and y[3] < 0.0 <= y_new[3]:  # the cycle's amplitude, on the interpolant
+            lowest = min(lowest, rotor_turning_value(method, y, f0, h, y_new, k, xi, j1, slope,
+                                                     idle, stages, work, part, f_part))
         peak, kept = keep_peak(peak, y, f0, y_new, f_new, best_a, best_fa, best_b, best_fb)
         if kept:
             best_h, best_t = h, t

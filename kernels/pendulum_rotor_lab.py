@@ -19,12 +19,13 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS
 from kernels.pendulum import (SUBSTEP_SAMPLES, _hermite, accepted_step_size, classify_period,
-                              hermite_slope, initial_step, next_step, turning_value)
+                              hermite_slope, initial_step, next_step)
 from kernels.pendulum_lab import (LAB_CONTACT, LAB_ESCAPE, LAB_MAX_STEPS, LAB_NO_IMPACT,
                                   LAB_UNDERFLOW, SECTION_MIN_FLIGHT, SPEED_EPS, beta,
                                   flight_outcome, h_ratio, h_slope)
 from kernels.pendulum_rotor import (METHOD_DOPRI5, _refine_peak, _rhs, _step, attempt, keep_peak,
-                                    rotor_accelerations, rotor_mass_matrix)
+                                    rotor_accelerations, rotor_mass_matrix,
+                                    rotor_turning_value)
 
 SLIDE_STEP = 1e-3  # RK4 step of the slide [rotor rad]: its error (~step^4) is round-off
 
@@ -251,7 +252,8 @@ def rotor_lab_flight(y, lower, window, k, k_cm, xi, j1, slope, idle, method, rto
             continue
         amp = max(amp, abs(y_new[2]))
         if (y[3] < 0.0) != (y_new[3] < 0.0):
-            amp = max(amp, abs(turning_value(h, y[2], y[3], y_new[2], y_new[3])))
+            amp = max(amp, abs(rotor_turning_value(method, y, f0, h, y_new, k_cm, xi, j1,
+                                                   slope, idle, stages, work, part, f_part)))
         peak, kept = keep_peak(peak, y, f0, y_new, f_new, best_a, best_fa, best_b, best_fb)
         if kept:
             best_h, best_t = h, t
