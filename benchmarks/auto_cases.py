@@ -8,11 +8,11 @@ import math
 import numpy as np
 
 from kernels import pendulum as pd
-from kernels import rotary_pendulum as kr
 from sweep import registry
 
-MECH = registry.get("rotary_pendulum")
-OUT = {name: j for j, name in enumerate(kr.OUTPUTS)}
+KERNEL = registry.get("rotary_pendulum")
+MECH = KERNEL.declaration
+OUT = MECH.output_index._asdict()
 VALUES = ("amplitude", "frequency_ratio", "impact_interval", "impact_speed",
           "acceleration_peak")
 EVALS_PER_STEP = {"rk4": 4, "dopri5": 6}  # new right-hand sides per step (DOPRI5: FSAL)
@@ -24,8 +24,7 @@ def points(model, n, seed):
     cols = {p.name: np.full(n, p.encode(p.default)) if p.default is not None
             else np.full(n, math.nan) for p in MECH.parameters}
     k = rng.uniform(0.9, 2.5, n)
-    cols["model"][:] = {"paper": pd.MODEL_PAPER, "rigid": pd.MODEL_RIGID,
-                        "rotor": kr.MODEL_ROTOR}[model]
+    cols["model"][:] = MECH.parameter("model").encode(model)
     cols["k"] = k
     cols["omega1"] = rng.uniform(20, 100, n)
     cols["l2"] = rng.uniform(0.02, 0.06, n)
@@ -42,9 +41,9 @@ def points(model, n, seed):
 
 
 def run(params, integrator="auto", tol=1e-8, rtol=1e-10, dt=0.002, atol_per_rtol=1e-2):
-    method = np.array([MECH.method["integrator"].encode(integrator), rtol,
-                       rtol * atol_per_rtol, dt, 1000, tol])
-    out, status, _ = MECH.run(params, method)
+    method = MECH.method_record(integrator=integrator, rtol=rtol, atol=rtol * atol_per_rtol,
+                                dt=dt, max_impacts=1000, tol=tol)
+    out, status, _ = KERNEL.run(params, method)
     return out, status
 
 

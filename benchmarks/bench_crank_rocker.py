@@ -21,7 +21,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from kernels import crank_rocker as cr  # noqa: E402
-from kernels import status as st  # noqa: E402
 from benchmarks.timing import paired_times  # noqa: E402
 
 N = 1_000_000
@@ -30,14 +29,14 @@ N = 1_000_000
 def make_points(n, seed=1):
     """Random synthesis points of types a, b, c (b mostly above its real-synthesis bound)."""
     rng = np.random.default_rng(seed)
-    p = np.full((len(cr.PARAMETERS), n), np.nan)
-    p[cr.P_TYPE] = rng.integers(0, 3, n)
-    p[cr.P_R] = rng.uniform(0.05, 0.4, n)
-    p[cr.P_L] = np.exp(rng.uniform(np.log(1.5), np.log(40.0), n))
-    p[cr.P_ROOT] = 0
-    p[cr.P_L1] = 0.1
-    p[cr.P_W] = 30.0
-    p[cr.P_SIGMA] = cr.SIGMA_IMPACT
+    p = np.full((len(cr.P), n), np.nan)
+    p[cr.P.type] = rng.integers(0, 3, n)
+    p[cr.P.R] = rng.uniform(0.05, 0.4, n)
+    p[cr.P.largest_link] = np.exp(rng.uniform(np.log(1.5), np.log(40.0), n))
+    p[cr.P.base_root] = 0
+    p[cr.P.crank_length] = 0.1
+    p[cr.P.omega1] = 30.0
+    p[cr.P.sigma] = cr.SIGMA_IMPACT
     return p
 
 
@@ -45,9 +44,9 @@ def numpy_crank_rocker(p, tol):
     """The same closed forms as kernels.crank_rocker, vectorised with numpy (types a, b, c,
     sigma = impact, omega1 > 0): the straightforward baseline."""
     n = p.shape[1]
-    out = np.full((len(cr.OUTPUTS), n), np.nan)
-    status = np.full(n, st.OK, dtype=np.int8)
-    kind, r, big = p[cr.P_TYPE], p[cr.P_R], p[cr.P_L]
+    out = np.full((len(cr.O), n), np.nan)
+    status = np.full(n, cr.S.ok, dtype=np.int8)
+    kind, r, big = p[cr.P.type], p[cr.P.R], p[cr.P.largest_link]
     g2 = ((1 + r) / (1 - r)) ** 2
     a, b, c = kind == 0, kind == 1, kind == 2
     lam0, lam2, lam3 = np.empty(n), np.empty(n), np.empty(n)
@@ -66,19 +65,19 @@ def numpy_crank_rocker(p, tol):
     lam0[b] = (g2 * big / larger)[b]
     lam2[b] = larger[b]
     g_max = (1 + big) / (2 * np.sqrt(big))
-    out[cr.O_RK_MAX] = np.where(b, (g_max - 1) / (g_max + 1), np.nan)
+    out[cr.O.restitution_kinematic_max] = np.where(b, (g_max - 1) / (g_max + 1), np.nan)
     nrs = b & ~(disc >= 0)
     lam0[nrs] = lam2[nrs] = lam3[nrs] = np.nan
-    out[cr.O_LAM0], out[cr.O_LAM2], out[cr.O_LAM3] = lam0, lam2, lam3
+    out[cr.O.lambda0], out[cr.O.lambda2], out[cr.O.lambda3] = lam0, lam2, lam3
     scale = tol * (1 + lam0 + lam2 + lam3)
     ia = np.abs(lam0 + lam3 - 1 - lam2) <= scale
     ib = np.abs(lam0 + lam2 - 1 - lam3) <= scale
     ic = np.abs(lam0 + 1 - lam2 - lam3) <= scale
     count = ia.astype(float) + ib + ic
-    out[cr.O_COUNT] = np.where(nrs, np.nan, count)
+    out[cr.O.special_position_count] = np.where(nrs, np.nan, count)
     slack = tol * (lam0 + 1 + lam2 + lam3)
     turns = (lam0 + 1 <= lam2 + lam3 + slack) & (np.abs(lam0 - 1) >= np.abs(lam2 - lam3) - slack)
-    out[cr.O_TURNS] = np.where(nrs, np.nan, turns.astype(float))
+    out[cr.O.crank_turns_fully] = np.where(nrs, np.nan, turns.astype(float))
 
     def mu(phi):
         sh, ch = np.sin(0.5 * phi), np.cos(0.5 * phi)
@@ -92,43 +91,43 @@ def numpy_crank_rocker(p, tol):
 
     mu0 = np.where(ia | ib, 0.0, mu(0.0))  # a change point's dead centre: mu = 0 exactly
     mupi = np.where(ic, 0.0, mu(np.pi))
-    out[cr.O_MU_MIN] = np.where(turns, np.minimum(mu0, mupi), np.nan)
-    out[cr.O_GAMMA] = np.where(nrs, np.nan, np.sqrt(lam0 * lam2 / lam3))
+    out[cr.O.transmission_angle_min] = np.where(turns, np.minimum(mu0, mupi), np.nan)
+    out[cr.O.gamma] = np.where(nrs, np.nan, np.sqrt(lam0 * lam2 / lam3))
     phi_star = np.where(c, np.pi, 0.0)
-    out[cr.O_PHI_STAR] = np.where(nrs, np.nan, phi_star)
-    out[cr.O_MU_OPP] = np.where(turns, np.where(c, mu0, mupi), np.nan)
+    out[cr.O.special_crank_angle] = np.where(nrs, np.nan, phi_star)
+    out[cr.O.transmission_angle_opposite] = np.where(turns, np.where(c, mu0, mupi), np.nan)
     kappa = np.where(b, -1.0, 1.0)
     den = np.where(c, 1 + lam0, 1 - lam0)
     sigma = -kappa
-    gam = out[cr.O_GAMMA]
+    gam = out[cr.O.gamma]
     before = (1 - kappa * sigma * gam) / den
     after = (1 + kappa * sigma * gam) / den
     moving = turns & ~nrs
-    out[cr.O_BRANCH] = np.where(moving, sigma, np.nan)
-    out[cr.O_BEFORE] = np.where(moving, before, np.nan)
-    out[cr.O_AFTER] = np.where(moving, after, np.nan)
-    out[cr.O_RK] = np.where(moving, after / before, np.nan)
-    out[cr.O_RATIO] = np.where(moving, np.abs(before), np.nan)
-    out[cr.O_SPEED] = np.where(moving, np.abs(before) * np.abs(p[cr.P_W]) * lam3 * p[cr.P_L1],
+    out[cr.O.assembly_branch] = np.where(moving, sigma, np.nan)
+    out[cr.O.transfer_before] = np.where(moving, before, np.nan)
+    out[cr.O.transfer_after] = np.where(moving, after, np.nan)
+    out[cr.O.restitution_kinematic] = np.where(moving, after / before, np.nan)
+    out[cr.O.impact_transfer_ratio] = np.where(moving, np.abs(before), np.nan)
+    out[cr.O.impact_speed] = np.where(moving, np.abs(before) * np.abs(p[cr.P.omega1]) * lam3 * p[cr.P.crank_length],
                                np.nan)
-    status[~turns] = st.NOT_ASSEMBLABLE
-    status[moving & (count > 1)] = st.SECOND_SPECIAL_POSITION
-    status[nrs] = st.NO_REAL_SYNTHESIS
+    status[~turns] = cr.S.not_assemblable
+    status[moving & (count > 1)] = cr.S.second_special_position
+    status[nrs] = cr.S.no_real_synthesis
     return out, status
 
 
 def kernel_vs_numpy():
     p = make_points(N)
-    method = np.array([1e-9])
+    method = cr.DECLARATION.method_record(geometry_tol=1e-9)
     t = time.perf_counter()
-    cr.crank_rocker_run(p[:, :10], method)
+    cr.run(p[:, :10], method)
     first_call = time.perf_counter() - t  # cached compilation (or load from cache)
-    ref_out, ref_status, _ = cr.crank_rocker_run(p, method)
+    ref_out, ref_status, _ = cr.run(p, method)
     np_out, np_status = numpy_crank_rocker(p, 1e-9)
     assert np.array_equal(ref_status, np_status), "numpy baseline disagrees on status"
     assert np.allclose(ref_out, np_out, rtol=1e-12, atol=0, equal_nan=True), \
         "numpy baseline disagrees on values"
-    t_numba, t_numpy = paired_times(lambda: cr.crank_rocker_run(p, method),
+    t_numba, t_numpy = paired_times(lambda: cr.run(p, method),
                                     lambda: numpy_crank_rocker(p, 1e-9))
     return {"points": N, "first_call_s": first_call,
             "numba_s": t_numba, "numpy_s": t_numpy,
@@ -164,11 +163,11 @@ def in_memory(workers):
 
 
 def end_to_end(workers, level):
-    from sweep import atlas, spec
+    from sweep import runner, spec
 
     s = spec.parse(SPEC.format(level=level))
     kernel_time = [0.0]
-    run = s.mechanism.run
+    run = s.kernel
 
     def timed(params, method):
         t = time.perf_counter()
@@ -176,16 +175,13 @@ def end_to_end(workers, level):
         kernel_time[0] += time.perf_counter() - t
         return result
 
-    object.__setattr__(s.mechanism, "run", timed)
-    try:
-        with tempfile.TemporaryDirectory() as tmp:
-            path = Path(tmp) / "bench.nc"
-            t = time.perf_counter()
-            atlas.run_sweep(s, path, progress=False, workers=workers, history="benchmark")
-            wall = time.perf_counter() - t
-            size = path.stat().st_size
-    finally:
-        object.__setattr__(s.mechanism, "run", run)
+    s.kernel = timed
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "bench.nc"
+        t = time.perf_counter()
+        runner.run_sweep(s, path, progress=False, workers=workers, history="benchmark")
+        wall = time.perf_counter() - t
+        size = path.stat().st_size
     return {"points": s.size, "workers": workers, "compress_level": level, "wall_s": wall,
             "kernel_s_summed_over_threads": kernel_time[0],
             "share_outside_kernel": 1 - kernel_time[0] / (wall * workers),

@@ -29,21 +29,18 @@ SNAP = 1e-9
 
 def make_params(n, seed=2):
     rng = np.random.default_rng(seed)
-    from sweep import registry
-
-    mech = registry.get("linkage_forces")
-    pr = np.array([[p.encode(p.default)] * n for p in mech.parameters], dtype=float)
-    idx = {name: i for i, name in enumerate(kt.PARAMETERS)}
-    pr[idx["omega1"]] = rng.uniform(5, 40, n)
-    pr[idx["tilt"]] = rng.uniform(0, math.pi / 2, n)
-    pr[idx["m3"]] = rng.uniform(2, 12, n)
-    pr[idx["sigma"]] = -1.0
+    pr = np.array([[p.encode(p.default)] * n for p in kt.DECLARATION.parameters],
+                  dtype=float)
+    pr[kt.P.omega1] = rng.uniform(5, 40, n)
+    pr[kt.P.tilt] = rng.uniform(0, math.pi / 2, n)
+    pr[kt.P.m3] = rng.uniform(2, 12, n)
+    pr[kt.P.sigma] = -1.0
     return pr
 
 
 def numpy_joint_forces(phi1, pr):
     """Vector form of linkages.md §5.3 for arrays: phi1 (1, M), parameters as (N, 1)."""
-    P = {name: pr[i][:, None] for i, name in enumerate(kt.PARAMETERS)}
+    P = {name: pr[i][:, None] for name, i in kt.P._asdict().items()}
     l0, l1, l2, l3, sigma = P["l0"], P["l1"], P["l2"], P["l3"], P["sigma"]
     sh, ch = np.sin(0.5 * phi1), np.cos(0.5 * phi1)
     lim = SNAP * (l0 + l1 + l2 + l3)
@@ -92,18 +89,20 @@ def numpy_joint_forces(phi1, pr):
 def main():
     pr = make_params(POINTS)
     angles = kt.profile_angles(ANGLES)
-    method = np.array([SNAP, 0.01, 2, 3, ANGLES])
-    bare = np.array([SNAP, 0.01, 2, 3, 0])  # the same run without profiles
+    method = kt.DECLARATION.method_record(geometry_tol=SNAP, special_window=0.01,
+                                          quadrature_points=2, peak_samples=3,
+                                          profile_points=ANGLES)
+    bare = method._replace(profile_points=0)  # the same run without profiles
     evals = POINTS * ANGLES
-    _, _, prof = kt.linkage_forces_run(pr, method)
+    _, _, prof = kt.run(pr, method)
     f14, f21, f32, f34, mb = numpy_joint_forces(angles[None, :], pr)
-    f21_n = (f21 * np.exp(-1j * np.angle(f21 - f21) * 0)).real  # placeholder for shape
-    assert f21_n.shape == prof[0].shape
+    assert mb.shape == prof[kt.F.balancing_moment].shape
     # agreement: the profiles' M_b (virtual work) vs numpy's reaction-route M_b
-    assert np.allclose(prof[8], mb, rtol=1e-8, atol=1e-8 * np.nanmax(np.abs(mb)))
-    t_full, t_numpy = paired_times(lambda: kt.linkage_forces_run(pr, method),
+    assert np.allclose(prof[kt.F.balancing_moment], mb, rtol=1e-8,
+                       atol=1e-8 * np.nanmax(np.abs(mb)))
+    t_full, t_numpy = paired_times(lambda: kt.run(pr, method),
                                    lambda: numpy_joint_forces(angles[None, :], pr), repeats=5)
-    t_bare = best_time(lambda: kt.linkage_forces_run(pr, bare), 5)
+    t_bare = best_time(lambda: kt.run(pr, bare), 5)
     t_numba = t_full - t_bare
     numpy_evals = POINTS * ANGLES
     result = {"machine": platform.node(), "points": POINTS, "angles": ANGLES,

@@ -63,7 +63,7 @@ def scipy_steady_state(k, r, rtol, max_impacts=200):
 
 def main():
     ks, rs = cases(400)
-    out = np.empty(11)
+    out = np.empty(pd.N_ROW)
     pd.dimensionless(0, 2.0, XI, 0.8, 0.1, 1, 0, 0, 0, 1000, out)
     pd.dimensionless(0, 2.0, XI, 0.8, 0.1, 3, 1e-8, 1e-10, 0, 1000, out)
     result = {"machine": platform.node()}
@@ -82,7 +82,7 @@ def main():
                               status)
             best = min(best, time.perf_counter() - t)
         result[name] = n / best
-        result[name + "_flights_per_state"] = float(np.mean(rows[:, 9]))
+        result[name + "_flights_per_state"] = float(np.mean(rows[:, pd.ROW_EVENTS]))
     n_scipy = 20
     worst, best = 0.0, math.inf
     for _ in range(3):  # best of three, as for the numba paths
@@ -95,7 +95,7 @@ def main():
         v, tau1 = scipy_steady_state(k, r, 1e-8)
         flights += scipy_steady_state.flights
         pd.dimensionless(0, k, XI, 0.8, r, 1, 0, 0, 0, 1000, out)
-        worst = max(worst, abs(tau1 / out[3] - 1))
+        worst = max(worst, abs(tau1 / out[pd.ROW_INTERVAL] - 1))
     result["scipy_flights_per_state"] = flights / n_scipy
     result["scipy_dop853_rtol_1e-8"] = n_scipy / best
     result["scipy_worst_rel_error_tau1"] = worst
@@ -106,17 +106,19 @@ def main():
         result["dopri5_rtol_1e-8_flights_per_state"] / result["scipy_flights_per_state"])
     # the closed form over a whole grid: the per-point cost with omega1 as a free axis
     m = 10000
-    params = np.array([np.zeros(m), np.repeat(ks[:100], 100), np.full(m, XI),
-                       np.full(m, np.nan), np.repeat(rs[:100], 100),
-                       np.tile(np.linspace(20, 100, 100), 100), np.full(m, 0.04),
-                       np.zeros(m), np.full(m, 0.2), np.full(m, 100.0), np.full(m, 100.0),
-                       np.ones(m)])
-    method = np.array([0, 1e-10, 1e-12, 0.002, 1000, 1e-8])  # integrator auto: closed form
-    kr.pendulum_run(params, method)
+    columns = dict(model=np.zeros(m), k=np.repeat(ks[:100], 100), xi=np.full(m, XI),
+                   kappa=np.full(m, np.nan), R=np.repeat(rs[:100], 100),
+                   omega1=np.tile(np.linspace(20, 100, 100), 100), l2=np.full(m, 0.04),
+                   tool=np.zeros(m), tool_window=np.full(m, 0.2),
+                   rotor_inertia_ratio=np.full(m, 100.0), motor_slope=np.full(m, 100.0),
+                   idle_speed=np.ones(m))
+    params = np.array([columns[name] for name in kr.P._fields])
+    method = kr.DECLARATION.method_record()  # integrator auto: the closed form here
+    kr.run(params, method)
     best = math.inf
     for _ in range(5):
         t = time.perf_counter()
-        kr.pendulum_run(params, method)
+        kr.run(params, method)
         best = min(best, time.perf_counter() - t)
     result["closed_form_grid_points_per_s_100_omega1_per_case"] = m / best
     print(f"rotary pendulum, 1 thread, steady states per second: closed form "

@@ -22,29 +22,30 @@ from kernels import balancer as bl  # noqa: E402
 
 def grid(n, geometries, seed=4):
     rng = np.random.default_rng(seed)
-    p = np.empty((8, n))
+    p = np.empty((len(bl.P), n))
     geo = np.array([[3.0, 3.5, 2.5], [3.0, 3.0, 1.5], [4.0, 3.8, 2.9], [3.5, 3.2, 2.4]])
+    lengths = [bl.P.lambda0, bl.P.lambda2, bl.P.lambda3]
     if geometries == 1:
-        p[:3] = geo[0][:, None]
+        p[lengths] = geo[0][:, None]
     else:  # every point its own geometry: the coefficients cannot be shared
-        p[:3] = geo[rng.integers(0, 4, n)].T + rng.uniform(0, 1e-3, (3, n))
-    p[3] = 1.0
-    p[4] = rng.uniform(0.3, 2.0, n)
-    p[5] = rng.uniform(0.3, 2.0, n)
-    p[6] = rng.uniform(0.005, 0.1, n)
-    p[7] = 0.0
+        p[lengths] = geo[rng.integers(0, 4, n)].T + rng.uniform(0, 1e-3, (3, n))
+    p[bl.P.sigma] = 1.0
+    p[bl.P.f] = rng.uniform(0.3, 2.0, n)
+    p[bl.P.r] = rng.uniform(0.3, 2.0, n)
+    p[bl.P.eta] = rng.uniform(0.005, 0.1, n)
+    p[bl.P.spring_neutral] = bl.NEUTRAL_HALF_SWING
     return p
 
 
 def main():
-    method = np.array([0, 1e-10, 1e-9])
-    bl.balancer_run(grid(10, 1), method)
+    method = bl.DECLARATION.method_record()  # harmonics "auto", tol 1e-10
+    bl.run(grid(10, 1), method)
     n_shared, n_own = 20000, 200
-    t_shared = best_time(lambda: bl.balancer_run(grid(n_shared, 1), method))
-    t_own = best_time(lambda: bl.balancer_run(grid(n_own, n_own), method))
+    t_shared = best_time(lambda: bl.run(grid(n_shared, 1), method))
+    t_own = best_time(lambda: bl.run(grid(n_own, n_own), method))
     a, b, g0 = bl.fourier_coefficients(3.0, 1.0, 3.5, 2.5, 1.0)
     t_coef = best_time(lambda: bl.fourier_coefficients(3.0, 1.0, 3.5, 2.5, 1.0))
-    out = np.empty(len(bl.OUTPUTS))
+    out = np.empty(len(bl.O))
     t_resp = best_time(lambda: [bl.response(a, b, g0, 1.1, 0.9, 0.02, 0, 1e-10, 1e-9, 0, out)
                            for _ in range(1000)]) / 1000
     bl.shooting(3.0, 1.0, 3.5, 2.5, 1.0, 1.1, 0.9, 0.02, g0 / 2, True, 100)

@@ -56,13 +56,14 @@ def _finish(fig, ax, path: Path, xlabel: str, ylabel: str, title: str) -> None:
 
 def pendulum_work_precision(path: Path):
     k, xi, r = 2.5, 4.0, 0.2
-    out = np.empty(11)
+    out = np.empty(pd.N_ROW)
     pd.dimensionless(0, k, xi, 0.8, r, pd.INTEGRATOR_CLOSED, 0, 0, 0, 1000, out)
-    ref = out[[3, 1, 4]].copy()  # impact interval, amplitude, pre-impact speed
+    rows = [pd.ROW_INTERVAL, pd.ROW_AMPLITUDE, pd.ROW_SPEED]  # pre-impact psi' here
+    ref = out[rows].copy()
 
     def error(integrator, rtol, dt):
         pd.dimensionless(0, k, xi, 0.8, r, integrator, rtol, rtol * 1e-2, dt, 1000, out)
-        return float(np.max(np.abs(out[[3, 1, 4]] / ref - 1)))
+        return float(np.max(np.abs(out[rows] / ref - 1)))
 
     series = {}
     dts = np.geomspace(0.2, 0.004, 9)
@@ -186,7 +187,7 @@ def balancer_work_precision(path: Path):
     grid = np.linspace(0, 2 * np.pi, 2048, endpoint=False)
     ref = g2_series(grid, full)
     scale = np.max(np.abs(ref))
-    out = np.empty(len(bl.OUTPUTS))
+    out = np.empty(len(bl.O))
     fourier = []
     for m in (2, 3, 4, 6, 8, 10, 13, 16, 20, 25):
         err = np.max(np.abs(g2_series(grid, m) - ref)) / scale

@@ -18,18 +18,77 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels import status as st
+from kernels.declaration import POSITIVE, Mechanism, Output, Quantity
 from kernels.fourbar import closure_vectors, crank_turns_fully, vector_kinematics
 
-PARAMETERS = ("lambda0", "lambda2", "lambda3", "sigma", "f", "r", "eta", "spring_neutral")
-OUTPUTS = (
-    "swing", "moment_invariant_peak_free", "moment_invariant_peak_balanced",
-    "balancing_coefficient", "dynamic_coefficient_free", "dynamic_coefficient_balanced",
-    "acceleration_invariant_rigid", "harmonics_used", "truncation_error", "resonance_margin",
-)
-METHOD = ("harmonics", "tol", "resonance_tol")
-
 NEUTRAL_HALF_SWING, NEUTRAL_MEAN = 0, 1
+
+DECLARATION = Mechanism(
+    name="spring_balancer",
+    title="Leaf-spring balancer on a four-bar: steady state by Fourier series (seed 002)",
+    summary="rocker motion from the loop closure, Fourier coefficients by rFFT once per "
+            "geometry, steady state per harmonic in closed form, invariants by their own "
+            "transfer functions, maxima over a revolution by dense sampling and Newton "
+            "refinement",
+    references="A. A. Abdurakhmanov, Influence of a spring levelling mechanism on the action "
+               "of a hinged four-bar mechanism (in Ukrainian, English summary); the copy "
+               "received gives neither journal nor year",
+    parameters=(
+        Quantity("lambda0", "1", "base ratio l0/l1 (lambda0)", "λ0", default=3.0,
+                 **POSITIVE),
+        Quantity("lambda2", "1", "coupler ratio l2/l1 (lambda2)", "λ2", default=3.5,
+                 **POSITIVE),
+        Quantity("lambda3", "1", "rocker ratio l3/l1 (lambda3)", "λ3", default=2.5,
+                 **POSITIVE),
+        Quantity("sigma", "1", "assembly branch (sigma)", "σ", default=1,
+                 choices={1: 1, -1: -1}),
+        Quantity("f", "1", "speed-change coefficient f = omega/omega0", "f", default=1.0,
+                 **POSITIVE),
+        Quantity("r", "1", "stiffness ratio r = omega0/p (the paper's omega0/p)", "r",
+                 default=1.0, **POSITIVE),
+        Quantity("eta", "1", "dimensionless damping eta = nu/omega0", "η", default=0.02,
+                 minimum=0.0, maximum=10.0),
+        Quantity("spring_neutral", "1", "neutral angle of the spring: half the swing (the "
+                 "paper) or the rocker's mean angle (no static moment)",
+                 default="half_swing",
+                 choices={"half_swing": NEUTRAL_HALF_SWING, "mean": NEUTRAL_MEAN}),
+    ),
+    outputs=(
+        Output("swing", "rad", "rocker swing (gamma0)", "γ0"),
+        Output("moment_invariant_peak_free", "rad", "peak unbalanced-moment invariant "
+               "without the balancer (M_i,max = max |gamma - g|)", "M_i,max",
+               "moment = c M_i = I_m omega0^2 M_i/r^2"),
+        Output("moment_invariant_peak_balanced", "rad", "peak unbalanced-moment invariant "
+               "with the balancer (M_zr,max)", "M_zr,max"),
+        Output("balancing_coefficient", "1", "balancing coefficient K = M_i,max / M_zr,max",
+               "K"),
+        Output("dynamic_coefficient_free", "1", "dynamic coefficient without the balancer "
+               "(K_d)", "K_d"),
+        Output("dynamic_coefficient_balanced", "1", "dynamic coefficient with the balancer "
+               "(K_d,zr)", "K_d,zr"),
+        Output("acceleration_invariant_rigid", "1", "peak rocker acceleration invariant "
+               "max |d2 gamma/d theta2| (rigid shaft)"),
+        Output("harmonics_used", "1", "harmonics of the rocker motion used"),
+        Output("truncation_error", "1", "estimated relative truncation error of the "
+               "acceleration metrics"),
+        Output("resonance_margin", "1", "distance to the nearest resonance, min |D_n|/K"),
+    ),
+    status=("ok", "not_assemblable", "resonance", "truncation", "nonfinite"),
+    usable=("truncation",),
+    method=(
+        Quantity("harmonics", "1", "harmonics of the rocker motion", default="auto",
+                 minimum=1, maximum=16384, integer=True, aliases={"auto": 0}),
+        Quantity("tol", "1", "relative tolerance of the metrics (sets the harmonic count "
+                 "when harmonics = \"auto\")", default=1e-10, minimum=1e-14, maximum=1e-2),
+        Quantity("resonance_tol", "1", "flag resonance where |D_n + i E_n| < resonance_tol "
+                 "K", default=1e-9, minimum=0.0, maximum=0.1),
+    ),
+)
+P = DECLARATION.parameter_index
+O = DECLARATION.output_index
+S = DECLARATION.status_codes
+#: the rows of a geometry in the parameter matrix (the Fourier coefficients depend on these)
+GEOMETRY_ROWS = [P.lambda0, P.lambda2, P.lambda3, P.sigma]
 N_FFT_START, N_FFT_MAX = 4096, 65536
 TWO_PI = 2.0 * math.pi
 
@@ -48,8 +107,8 @@ def rocker_angle(theta, l0, l1, l2, l3, sigma):
 def _extreme(theta, l0, l1, l2, l3, sigma):
     """Newton on u31(theta) = 0 from theta: a rocker dead position (the swing's ends)."""
     for _ in range(30):
-        out = vector_kinematics(theta, l0, l1, l2, l3, sigma)
-        u, du = out[7], out[9]
+        c1, s1, c2, s2, c3, s3, u21, u, du21, du = vector_kinematics(theta, l0, l1, l2, l3,
+                                                                       sigma)
         step = u / du
         theta -= step
         if abs(step) < 1e-15:
@@ -202,6 +261,12 @@ def _apply(gr, gi, a, b):
     return gr * a + gi * b, gr * b - gi * a
 
 
+#: the series sampled over a revolution: rigid-shaft rocker acceleration, the unbalanced-moment
+#: invariants without and with the balancer, the driven mass's acceleration without and with
+(RIGID_ACCELERATION, INVARIANT_FREE, INVARIANT_BALANCED, MASS_ACCELERATION_FREE,
+ MASS_ACCELERATION_BALANCED) = range(5)
+N_SERIES = 5
+
 #: the weighted tail may use this share of tol: the peaks of the metrics combine several
 #: harmonics, and at share 1 one of 60 random points exceeded tol by 0.2 % (test_auto.py)
 TAIL_SHARE = 0.5
@@ -246,13 +311,14 @@ def choose_harmonics(a, b, f, r, eta, tol, forced):
 
 @njit(**KERNEL_OPTIONS)
 def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
-    """Metrics of dynamics.md §2.6 for one (f, r, eta): writes OUTPUTS into out, returns status."""
+    """Metrics of dynamics.md §2.6 for one (f, r, eta): writes the outputs into out (rows O),
+    returns the status."""
     for k in range(out.shape[0]):
         out[k] = math.nan
-    out[0] = gamma0
+    out[O.swing] = gamma0
     m, trunc = choose_harmonics(a, b, f, r, eta, tol, forced)
-    out[7] = m
-    out[8] = trunc
+    out[O.harmonics_used] = m
+    out[O.truncation_error] = trunc
     inv_r2 = 1.0 / (r * r)
     k_no, k_dev = inv_r2, 1.0 + inv_r2
     gamma_s = 0.5 * gamma0 if neutral == NEUTRAL_HALF_SWING else a[0]
@@ -282,14 +348,14 @@ def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
         jr[n], ji[n] = _apply(*_gain(1.0 - n2f2, e, d_dev, e), a[n], b[n])  # G_zr
         nr[n], ni[n] = _apply(*_gain(inv_r2, 0.0, d_no, e), a[n], b[n])  # H: mass / rocker
         dr[n], di[n] = _apply(*_gain(inv_r2, 0.0, d_dev, e), a[n], b[n])
-    out[9] = margin
+    out[O.resonance_margin] = margin
     if resonant:
-        return st.RESONANCE
+        return S.resonance
     zr[0] = zi[0] = ir[0] = ii[0] = jr[0] = ji[0] = nr[0] = ni[0] = dr[0] = di[0] = 0.0
     static_dev = (a[0] - gamma_s) * r * r / (1.0 + r * r)  # a0 - C0 (dynamics.md §2.5)
     # the five series on one grid, sharing the cos/sin recurrence, then refined peaks
     ns = max(32, 8 * m)
-    vals = np.zeros((5, ns))
+    vals = np.zeros((N_SERIES, ns))
     for j in range(ns):
         theta = TWO_PI * j / ns
         c, s = math.cos(theta), math.sin(theta)
@@ -303,22 +369,25 @@ def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
             v3 -= n2 * (nr[n] * cn + ni[n] * sn)
             v4 -= n2 * (dr[n] * cn + di[n] * sn)
             cn, sn = cn * c - sn * s, sn * c + cn * s
-        vals[0, j], vals[1, j], vals[2, j] = v0, v1, v2 + static_dev
-        vals[3, j], vals[4, j] = v3, v4
-    eps_rigid = _refine_peak(vals[0], zr, zi, 0.0, m, 2)
-    m_free = _refine_peak(vals[1], ir, ii, 0.0, m, 0)
-    m_dev = _refine_peak(vals[2], jr, ji, static_dev, m, 0)
-    out[1], out[2] = m_free, m_dev
-    out[3] = m_free / m_dev
-    out[4] = _refine_peak(vals[3], nr, ni, 0.0, m, 2) / eps_rigid
-    out[5] = _refine_peak(vals[4], dr, di, 0.0, m, 2) / eps_rigid
-    out[6] = eps_rigid
+        vals[RIGID_ACCELERATION, j] = v0
+        vals[INVARIANT_FREE, j], vals[INVARIANT_BALANCED, j] = v1, v2 + static_dev
+        vals[MASS_ACCELERATION_FREE, j], vals[MASS_ACCELERATION_BALANCED, j] = v3, v4
+    eps_rigid = _refine_peak(vals[RIGID_ACCELERATION], zr, zi, 0.0, m, 2)
+    m_free = _refine_peak(vals[INVARIANT_FREE], ir, ii, 0.0, m, 0)
+    m_dev = _refine_peak(vals[INVARIANT_BALANCED], jr, ji, static_dev, m, 0)
+    out[O.moment_invariant_peak_free], out[O.moment_invariant_peak_balanced] = m_free, m_dev
+    out[O.balancing_coefficient] = m_free / m_dev
+    out[O.dynamic_coefficient_free] = _refine_peak(vals[MASS_ACCELERATION_FREE], nr, ni, 0.0,
+                                                   m, 2) / eps_rigid
+    out[O.dynamic_coefficient_balanced] = _refine_peak(vals[MASS_ACCELERATION_BALANCED], dr, di,
+                                                       0.0, m, 2) / eps_rigid
+    out[O.acceleration_invariant_rigid] = eps_rigid
     for k in range(out.shape[0]):
         if not math.isfinite(out[k]):
-            return st.NONFINITE
+            return S.nonfinite
     if trunc > tol:
-        return st.TRUNCATION
-    return st.OK
+        return S.truncation
+    return S.ok
 
 
 @njit(**KERNEL_OPTIONS)
@@ -330,21 +399,22 @@ def balancer_block(params, geometry_index, coef_a, coef_b, lengths, gamma0s, tol
         if not ok_geometry[g]:
             for k in range(out.shape[0]):
                 out[k, i] = math.nan
-            status[i] = st.NOT_ASSEMBLABLE
+            status[i] = S.not_assemblable
             continue
         n_top = lengths[g]
-        status[i] = response(coef_a[g, :n_top], coef_b[g, :n_top], gamma0s[g], params[4, i],
-                             params[5, i], params[6, i], int(params[7, i]), tol, res_tol,
+        status[i] = response(coef_a[g, :n_top], coef_b[g, :n_top], gamma0s[g],
+                             params[P.f, i], params[P.r, i], params[P.eta, i],
+                             int(params[P.spring_neutral, i]), tol, res_tol,
                              forced, out_i)
         for k in range(out.shape[0]):
             out[k, i] = out_i[k]
 
 
-def balancer_run(params, method):
-    """Registry entry point. Fourier coefficients once per distinct geometry in the block."""
-    forced, tol, res_tol = int(method[0]), method[1], method[2]
+def run(params, method):
+    """Entry point. Fourier coefficients once per distinct geometry in the block."""
+    forced, tol, res_tol = method.harmonics, method.tol, method.resonance_tol
     n = params.shape[1]
-    geometries, index = np.unique(params[:4].T, axis=0, return_inverse=True)
+    geometries, index = np.unique(params[GEOMETRY_ROWS].T, axis=0, return_inverse=True)
     size = 1 + N_FFT_MAX // 4
     coef_a = np.zeros((len(geometries), size))
     coef_b = np.zeros((len(geometries), size))
@@ -363,7 +433,7 @@ def balancer_run(params, method):
             lengths[g] = max(lengths[g], min(forced + 1, a.shape[0]))
         gamma0s[g] = gamma0
         ok[g] = True
-    out = np.empty((len(OUTPUTS), n))
+    out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
     balancer_block(np.ascontiguousarray(params), index.ravel().astype(np.int64), coef_a,
                    coef_b, lengths, gamma0s, tol, res_tol, forced, ok, out, status)
@@ -380,11 +450,12 @@ def _gamma_exact(theta, l0, l1, l2, l3, sigma, beta_min):
 
 @njit(**KERNEL_OPTIONS)
 def _rhs(theta, y0, y1, forcing_const, stiff, damp, f2, geo, beta_min, homogeneous):
-    """(g', g'') of (B4)/(B9); the homogeneous system drops the forcing."""
+    """(g', g'') of (B4)/(B9); the homogeneous system drops the forcing. geo: (l0, l1, l2,
+    l3, 1/r^2, sigma)."""
     force = 0.0
     if not homogeneous:
-        force = forcing_const + geo[4] * _gamma_exact(theta, geo[0], geo[1], geo[2], geo[3],
-                                                      geo[5], beta_min)
+        l0, l1, l2, l3, inv_r2, sigma = geo
+        force = forcing_const + inv_r2 * _gamma_exact(theta, l0, l1, l2, l3, sigma, beta_min)
     return y1, (force - stiff * y0 - damp * y1) / f2
 
 
@@ -409,8 +480,8 @@ def _setup(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device):
     inv_r2 = 1.0 / (r * r)
     stiff = 1.0 + inv_r2 if device else inv_r2
     const = gamma_s if device else 0.0
-    return (np.array([l0, l1, l2, l3, inv_r2, sigma]), beta_min, stiff, const,
-            2.0 * eta * f, np.mean(gam))
+    return ((l0, l1, l2, l3, inv_r2, float(sigma)), beta_min, stiff, const, 2.0 * eta * f,
+            np.mean(gam))
 
 
 @njit(**KERNEL_OPTIONS)

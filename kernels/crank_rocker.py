@@ -3,8 +3,8 @@
 Everything here is closed form: the branch values at the special position come from the
 series expansion of §2.4 (equal to the Hessian roots of the node), never from sampling the
 loop closure near the node. Parameters arrive as rows of a float64 matrix in the order of
-PARAMETERS (categories as the codes below, NaN = not given); outputs are written as rows in
-the order of OUTPUTS.
+the declaration (categories as the codes below, NaN = not given); outputs are written by
+name (``O.gamma``).
 """
 
 import math
@@ -12,8 +12,9 @@ import math
 import numpy as np
 from numba import njit
 
-from kernels import status as st
 from kernels import KERNEL_OPTIONS
+from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
+                                 Quantity, assembly_branch, geometry_tol)
 from kernels.fourbar import (
     CHANGE_POINT_A,
     CHANGE_POINT_B,
@@ -23,33 +24,121 @@ from kernels.fourbar import (
     transmission_angle_half,
 )
 
-PARAMETERS = (
-    "type", "R", "largest_link", "lambda0", "lambda2", "lambda3", "base_root",
-    "crank_length", "omega1", "sigma",
-)
-OUTPUTS = (
-    "lambda0", "lambda2", "lambda3", "gamma", "restitution_kinematic", "transfer_before",
-    "transfer_after", "impact_transfer_ratio", "impact_speed", "crank_turns_fully",
-    "transmission_angle_min", "transmission_angle_opposite", "assembly_branch",
-    "special_crank_angle", "special_position_count", "restitution_kinematic_max",
-)
-METHOD = ("geometry_tol",)
-
 TYPE_A, TYPE_B, TYPE_C, TYPE_GENERAL = 0, 1, 2, 3  # largest rod, rocker, base; any four-bar
-SIGMA_IMPACT = 0.0  # sigma code meaning "the branch that makes the node an impact"
 ROOT_SMALLER_BASE, ROOT_LARGER_BASE = 0, 1
+_TYPES = ("a", "b", "c")
+_LINKS = ("largest_link", "lambda0", "lambda2", "lambda3")
+#: the ways each type may be given its geometry (seed 000's tables are indexed by the
+#: type's largest link under its own name: lambda2 for a, lambda3 for b, lambda0 for c)
+_GEOMETRY = {
+    "a": ({"largest_link"}, {"lambda2"}),
+    "b": ({"largest_link"}, {"lambda3"}, {"lambda0"}),
+    "c": ({"largest_link"}, {"lambda0"}),
+    "general": ({"lambda0", "lambda2", "lambda3"},),
+}
 
-_P = {name: i for i, name in enumerate(PARAMETERS)}
-_O = {name: i for i, name in enumerate(OUTPUTS)}
-P_TYPE, P_R, P_L = _P["type"], _P["R"], _P["largest_link"]
-P_LAM0, P_LAM2, P_LAM3 = _P["lambda0"], _P["lambda2"], _P["lambda3"]
-P_ROOT, P_L1, P_W, P_SIGMA = _P["base_root"], _P["crank_length"], _P["omega1"], _P["sigma"]
-O_LAM0, O_LAM2, O_LAM3, O_GAMMA = _O["lambda0"], _O["lambda2"], _O["lambda3"], _O["gamma"]
-O_RK, O_BEFORE, O_AFTER = _O["restitution_kinematic"], _O["transfer_before"], _O["transfer_after"]
-O_RATIO, O_SPEED, O_TURNS = _O["impact_transfer_ratio"], _O["impact_speed"], _O["crank_turns_fully"]
-O_MU_MIN, O_MU_OPP = _O["transmission_angle_min"], _O["transmission_angle_opposite"]
-O_BRANCH, O_PHI_STAR = _O["assembly_branch"], _O["special_crank_angle"]
-O_COUNT, O_RK_MAX = _O["special_position_count"], _O["restitution_kinematic_max"]
+
+def _rules(given: dict) -> str | None:
+    """Each swept type must get exactly one of its ways of giving the geometry."""
+    types = given.get("type") or {"a"}
+    links = {name for name in _LINKS if name in given}
+    for t in sorted(types):
+        ways = _GEOMETRY[t]
+        if links in ways:
+            continue
+        text = " or ".join(" + ".join(sorted(w)) for w in ways)
+        extra = sorted(links - set().union(*ways))
+        if extra:
+            return (f"{extra[0]}: not used by type {t}, which takes {text}"
+                    + ("; run the types separately" if len(types) > 1 else ""))
+        missing = sorted(set().union(*ways) - links) if t == "general" else []
+        if missing:
+            return f"{missing[0]}: required for type general (it takes {text})"
+        name = sorted(links)[-1] if links else "largest_link"
+        what = "exactly one of" if len(ways) > 1 else ""
+        return f"{name}: type {t} takes {what} {text}".replace("  ", " ")
+    return None
+
+
+DECLARATION = Mechanism(
+    name="crank_rocker",
+    title="Crank-rocker impact four-bar: synthesis and kinematic restitution (seed 000)",
+    summary="closed form: synthesis (seed 000 eqs. 10-11; the type-b quadratic derived "
+            "here), branch values at the node from its series expansion, full-turn test; "
+            "no loop-closure sampling",
+    references="Crank-rocker impact mechanisms with the largest connecting rod and the "
+               "largest base (in Russian, Kyrgyz abstract), Institute of Machine Science, "
+               "National Academy of Sciences of the Kyrgyz Republic; the copy received "
+               "names neither authors nor year",
+    parameters=(
+        Quantity("type", "1", "impact four-bar type (a: largest rod, b: largest rocker, "
+                 "c: largest base, general: any four-bar)", default="a",
+                 choices={"a": TYPE_A, "b": TYPE_B, "c": TYPE_C, "general": TYPE_GENERAL}),
+        Quantity("R", "1", "physical restitution coefficient of the striker (R); synthesis "
+                 "makes Rk = -R", symbol="R", default=0.3, minimum=0.0, maximum=1.0,
+                 min_inclusive=False, max_inclusive=False, used_when={"type": _TYPES}),
+        Quantity("largest_link", "1", "largest link ratio of the type (lambda2 for a, "
+                 "lambda3 for b, lambda0 for c)", used_when={"type": _TYPES}, **POSITIVE),
+        Quantity("lambda0", "1", "base ratio l0/l1 (lambda0); type b: given instead of "
+                 "lambda3; type c: its largest link", symbol="λ0",
+                 used_when={"type": ("b", "c", "general")}, **POSITIVE),
+        Quantity("lambda2", "1", "connecting rod ratio l2/l1 (lambda2); type a: its "
+                 "largest link", symbol="λ2", used_when={"type": ("a", "general")},
+                 **POSITIVE),
+        Quantity("lambda3", "1", "rocker ratio l3/l1 (lambda3); type b: its largest link",
+                 symbol="λ3", used_when={"type": ("b", "general")}, **POSITIVE),
+        Quantity("base_root", "1", "type b given lambda3: which root of the synthesis "
+                 "quadratic is the base", default="smaller",
+                 choices={"smaller": ROOT_SMALLER_BASE, "larger": ROOT_LARGER_BASE},
+                 used_when={"type": ("b",)}),
+        Quantity("crank_length", "m", "crank length (l1)", symbol="l1", default=0.1,
+                 **POSITIVE),
+        Quantity("omega1", "rad s-1", "crank angular velocity (omega1); its sign is the "
+                 "rotation direction", symbol="ω1", default=30.0, nonzero=True),
+        assembly_branch(),
+    ),
+    outputs=(
+        Output("lambda0", "1", "base ratio l0/l1 (lambda0)", "λ0", echoes="lambda0"),
+        Output("lambda2", "1", "connecting rod ratio l2/l1 (lambda2)", "λ2", echoes="lambda2"),
+        Output("lambda3", "1", "rocker ratio l3/l1 (lambda3)", "λ3", echoes="lambda3"),
+        Output("gamma", "1", "node parameter sqrt(lambda0 lambda2 / lambda3) (gamma)", "γ"),
+        Output("restitution_kinematic", "1", "kinematic restitution coefficient (Rk)", "Rk",
+               "u31 after / u31 before the special position; negative for an impact "
+               "mechanism"),
+        Output("transfer_before", "1", "rocker transfer ratio approaching the special "
+               "position (u31 at impact)", "u31(φ1*−0)"),
+        Output("transfer_after", "1", "rocker transfer ratio leaving the special position",
+               "u31(φ1*+0)"),
+        Output("impact_transfer_ratio", "1", "magnitude of the transfer ratio at impact "
+               "(|u31(2 pi)| of seed 000's tables)", "|u31(2π)|"),
+        Output("impact_speed", "m s-1", "rocker tip speed at impact "
+               "(|u31| |omega1| lambda3 l1)"),
+        Output("crank_turns_fully", "1", "whether the crank can turn fully",
+               flags={"undetermined": -1, "no": 0, "yes": 1}, undetermined="undetermined"),
+        Output("transmission_angle_min", "rad", "minimum transmission angle over a crank "
+               "turn", "μmin", "0 for any change-point four-bar: all links are collinear at "
+               "the special position"),
+        Output("transmission_angle_opposite", "rad", "transmission angle at the dead "
+               "centre opposite the special position", "μ", "the design-relevant "
+               "transmission angle of an impact four-bar (its minimum is 0 at the impact by "
+               "construction)"),
+        Output("assembly_branch", "1", "assembly branch used (sigma)", "σ",
+               flags=BRANCH_FLAGS, undetermined="undetermined"),
+        Output("special_crank_angle", "rad", "crank angle of the impact special position "
+               "(phi1*)", "φ1*"),
+        Output("special_position_count", "1", "number of special positions per crank "
+               "turn"),
+        Output("restitution_kinematic_max", "1", "largest |Rk| reachable with this rocker "
+               "ratio (type b only)"),
+    ),
+    status=("ok", "not_assemblable", "no_real_synthesis", "wrong_branch", "nonfinite",
+            "degenerate", "no_impact", "second_special_position", "no_special_position"),
+    method=(geometry_tol("the full-turn test"),),
+    rules=_rules,
+)
+P = DECLARATION.parameter_index
+O = DECLARATION.output_index
+S = DECLARATION.status_codes
 
 
 @njit(**KERNEL_OPTIONS)
@@ -145,41 +234,50 @@ def _first_identity(mask):
 
 
 @njit(**KERNEL_OPTIONS)
+def _given(first, second):
+    """The first of two alternative inputs that is given (NaN = not given)."""
+    return second if math.isnan(first) else first
+
+
+@njit(**KERNEL_OPTIONS)
 def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code, tol):
-    """Evaluate one grid point. Returns (status, outputs in the order of OUTPUTS).
+    """Evaluate one grid point. Returns (status, lambda0, lambda2, lambda3, gamma, Rk,
+    u31 before, u31 after, |u31 before|, impact speed, crank turns fully (0/1), mu_min,
+    mu opposite, sigma, phi1*, special positions, |Rk| max): the outputs of one point.
 
     Works on local scalars and returns everything at once, so the block loop writes each
-    output exactly once; NaN stands for a value that does not exist at this point.
+    output exactly once; NaN stands for a value that does not exist at this point. ``big``
+    is largest_link; the type's own name for its largest link may stand in for it.
     """
     nan = math.nan
     lam0 = lam2 = lam3 = gamma = rk = before = after = ratio = speed = nan
     turns_out = mu_min = mu_opp = branch = phi_star = count_out = rk_max = nan
     direction = 1.0 if w > 0.0 else -1.0
-    status = st.OK
+    status = S.ok
     for _ in range(1):  # a single pass; "break" ends it early with the status set
         # 1. geometry: echo, or synthesis with Rk = -R (seed 000 eqs. 10, 11; §3.1 for b)
         if kind_code == TYPE_A:
-            lam2 = big
+            lam2 = _given(big, lam2_in)
             lam0, lam3 = synthesize_largest_rod(lam2, r)
             kind = CHANGE_POINT_A
         elif kind_code == TYPE_C:
-            lam0 = big
+            lam0 = _given(big, lam0_in)
             lam2, lam3 = synthesize_largest_base(lam0, r)
             kind = CHANGE_POINT_C
         elif kind_code == TYPE_B:
             kind = CHANGE_POINT_B
-            if not math.isnan(lam0_in):
+            lam3 = _given(big, lam3_in)
+            if math.isnan(lam3):
                 lam0 = lam0_in
                 lam2, lam3 = synthesize_largest_rocker_from_base(lam0, r)
             else:
-                lam3 = big
                 lam0, lam2 = synthesize_largest_rocker(lam3, r, root == ROOT_LARGER_BASE, tol)
             if lam3 > 0.0:
                 g_max = (1.0 + lam3) / (2.0 * math.sqrt(lam3))
                 rk_max = (g_max - 1.0) / (g_max + 1.0)
             if math.isnan(lam0) or math.isnan(lam2) or math.isnan(lam3):
                 lam0 = lam2 = lam3 = nan
-                status = st.NO_REAL_SYNTHESIS
+                status = S.no_real_synthesis
                 break
         else:
             lam0, lam2, lam3 = lam0_in, lam2_in, lam3_in
@@ -215,13 +313,13 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
                 mu_opp = mu0 if kind == CHANGE_POINT_C else mu_pi
             # B coincides with D at the node: one branch slope is infinite (H9)
             if kind != CHANGE_POINT_C and abs(lam0 - 1.0) <= tol * (1.0 + lam0 + lam2 + lam3):
-                status = st.DEGENERATE
+                status = S.degenerate
                 break
         if not turns:
-            status = st.NOT_ASSEMBLABLE
+            status = S.not_assemblable
             break
         if kind == 0:
-            status = st.NO_SPECIAL_POSITION
+            status = S.no_special_position
             break
 
         # 4. branch values, Rk and the impact speed on the chosen assembly branch
@@ -234,35 +332,38 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
         speed = ratio * abs(w) * lam3 * l1
         if not (math.isfinite(rk) and math.isfinite(before) and math.isfinite(after)
                 and math.isfinite(speed) and math.isfinite(gamma) and math.isfinite(mu_min)):
-            status = st.NONFINITE
+            status = S.nonfinite
         elif not (gamma > 1.0):
-            status = st.NO_IMPACT
+            status = S.no_impact
         elif sigma != impact_sigma:
-            status = st.WRONG_BRANCH
+            status = S.wrong_branch
         elif count > 1:
-            status = st.SECOND_SPECIAL_POSITION
-    return status, (lam0, lam2, lam3, gamma, rk, before, after, ratio, speed, turns_out,
-                    mu_min, mu_opp, branch, phi_star, count_out, rk_max)
+            status = S.second_special_position
+    return (status, lam0, lam2, lam3, gamma, rk, before, after, ratio, speed, turns_out,
+            mu_min, mu_opp, branch, phi_star, count_out, rk_max)
 
 
 @njit(**KERNEL_OPTIONS)
-def crank_rocker_block(params, method, out, status):
+def crank_rocker_block(params, geometry_tol, out, status):
     """Evaluate a block of grid points: params (n_params, n), out (n_outputs, n), status (n,)."""
-    tol = method[0]
     for i in range(params.shape[1]):
-        code, values = _point(int(params[P_TYPE, i]), params[P_R, i], params[P_L, i],
-                              params[P_LAM0, i], params[P_LAM2, i], params[P_LAM3, i],
-                              int(params[P_ROOT, i]), params[P_L1, i], params[P_W, i],
-                              params[P_SIGMA, i], tol)
-        status[i] = code
-        for k in range(len(values)):
-            out[k, i] = values[k]
+        (status[i], out[O.lambda0, i], out[O.lambda2, i], out[O.lambda3, i], out[O.gamma, i],
+         out[O.restitution_kinematic, i], out[O.transfer_before, i], out[O.transfer_after, i],
+         out[O.impact_transfer_ratio, i], out[O.impact_speed, i],
+         out[O.crank_turns_fully, i], out[O.transmission_angle_min, i],
+         out[O.transmission_angle_opposite, i], out[O.assembly_branch, i],
+         out[O.special_crank_angle, i], out[O.special_position_count, i],
+         out[O.restitution_kinematic_max, i]) = _point(
+            int(params[P.type, i]), params[P.R, i], params[P.largest_link, i],
+            params[P.lambda0, i], params[P.lambda2, i], params[P.lambda3, i],
+            int(params[P.base_root, i]), params[P.crank_length, i], params[P.omega1, i],
+            params[P.sigma, i], geometry_tol)
 
 
-def crank_rocker_run(params, method):
-    """Registry entry point: (outputs, status, profiles); this mechanism has no profiles."""
+def run(params, method):
+    """Entry point: (outputs, status, profiles); this mechanism has no profiles."""
     n = params.shape[1]
-    out = np.empty((len(OUTPUTS), n))
+    out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
-    crank_rocker_block(params, method, out, status)
+    crank_rocker_block(params, method.geometry_tol, out, status)
     return out, status, np.empty((0, n, 0))

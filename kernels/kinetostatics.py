@@ -20,8 +20,9 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels import status as st
 from kernels.crank_rocker import impact_branch
+from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
+                                 Quantity, assembly_branch, geometry_tol)
 from kernels.elementary import golden_points, golden_shrink
 from kernels.fourbar import (
     CHANGE_POINT_A,
@@ -32,26 +33,146 @@ from kernels.fourbar import (
     vector_kinematics,
 )
 
-PARAMETERS = (
-    "l0", "l1", "l2", "l3", "m1", "m2", "m3", "s1", "s2", "s3", "q1", "q2", "q3",
-    "J1", "J2", "J3", "omega1", "epsilon1", "tilt", "g", "sigma",
-    "external_force", "external_force_normal", "external_force_arm", "external_moment",
-    "base_motion", "base_omega", "base_epsilon", "crank_pivot_x", "crank_pivot_y",
-)
-OUTPUTS = (
-    "force_peak_A", "force_peak_B", "force_peak_C", "force_peak_D",
-    "balancing_moment_peak", "balancing_moment_rms", "cycle_work", "assembly_branch",
-)
-PROFILES = (
-    "F21_n", "F21_t", "F34_n", "F34_t", "F32_n", "F32_t", "F14_n", "F14_t", "balancing_moment",
-)
-METHOD = ("geometry_tol", "special_window", "quadrature_points", "peak_samples",
-          "profile_points")
-
-SIGMA_IMPACT = 0.0
 BASE_FIXED, BASE_ROTATING = 0, 1
 
-_I = {name: i for i, name in enumerate(PARAMETERS)}
+# defaults: the kinetostatic test mechanism (seed 000 Table 1, lambda2 = 2.5, R = 0.3,
+# crank 0.1 m, tilt 25 degrees, 30 rad/s), so that the example runs as it is
+_L1 = 0.1
+_L0, _L2, _L3 = 2.029159519725557 * _L1, 2.5 * _L1, 1.470840480274443 * _L1
+_NONNEG = dict(minimum=0.0)
+_ROTATING = {"base_motion": ("rotating",)}
+_WINDOWED = "outside |phi1 - phi1*| < special_window at a special position"
+
+DECLARATION = Mechanism(
+    name="linkage_forces",
+    title="Kinetostatics of the impact four-bar and GUIM-1's additional rocker (seed 001)",
+    summary="Assur-dyad vector route for the reactions, balancing moment by virtual work, "
+            "loop closure in factored form; cycle work and RMS by Gauss-Legendre on the "
+            "open cycle, peaks from a uniform sample outside the special-position window "
+            "refined by golden section",
+    references="Power calculation of the GUIM-1 impact mechanism with an additional rocker "
+               "arm (in Russian), Vestnik of Issyk-Kul State University no. 50, 2021; the "
+               "copy received does not name the authors",
+    parameters=(
+        Quantity("l0", "m", "base length AD (l0)", "l0", default=_L0, **POSITIVE),
+        Quantity("l1", "m", "crank length AB (l1)", "l1", default=_L1, **POSITIVE),
+        Quantity("l2", "m", "coupler length BC (l2)", "l2", default=_L2, **POSITIVE),
+        Quantity("l3", "m", "rocker length DC (l3)", "l3", default=_L3, **POSITIVE),
+        Quantity("m1", "kg", "crank mass (m1)", "m1", default=2.0, **_NONNEG),
+        Quantity("m2", "kg", "coupler mass (m2)", "m2", default=3.0, **_NONNEG),
+        Quantity("m3", "kg", "rocker mass (m3)", "m3", default=8.0, **_NONNEG),
+        Quantity("s1", "1", "crank centroid along AB, fraction of l1 from A", default=0.5),
+        Quantity("s2", "1", "coupler centroid along BC, fraction of l2 from B",
+                 default=0.48),
+        Quantity("s3", "1", "rocker centroid along DC, fraction of l3 from D",
+                 default=0.11 / _L3),
+        Quantity("q1", "m", "crank centroid offset across the link", default=0.01),
+        Quantity("q2", "m", "coupler centroid offset across the link", default=-0.02),
+        Quantity("q3", "m", "rocker centroid offset across the link", default=0.015),
+        Quantity("J1", "kg m2", "crank centroidal moment of inertia (I_S1)", "I_S1",
+                 default=2 * 0.1**2 / 12 + 0.001, **_NONNEG),
+        Quantity("J2", "kg m2", "coupler centroidal moment of inertia (I_S2)", "I_S2",
+                 default=3 * 0.25**2 / 12, **_NONNEG),
+        Quantity("J3", "kg m2", "rocker centroidal moment of inertia (I_S3)", "I_S3",
+                 default=8 * 0.15**2 / 12 + 0.02, **_NONNEG),
+        Quantity("omega1", "rad s-1", "crank angular velocity (omega1); 0 gives statics",
+                 "ω1", default=30.0),
+        Quantity("epsilon1", "rad s-2", "crank angular acceleration (epsilon1)", "ε1",
+                 default=0.0),
+        Quantity("tilt", "rad", "inclination of the base AD to the horizontal (gamma + psi "
+                 "of seed 001)", "γ + ψ", default=math.radians(25.0), minimum=-math.pi,
+                 maximum=math.pi),
+        Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG),
+        assembly_branch(),
+        Quantity("external_force", "N", "external force on the rocker, across it "
+                 "(positive towards increasing phi3)", default=0.0),
+        Quantity("external_force_normal", "N", "external force on the rocker, along D->C",
+                 default=0.0),
+        Quantity("external_force_arm", "m", "distance from D along the rocker where the "
+                 "external force acts", default=0.0),
+        Quantity("external_moment", "N m", "external couple on the rocker "
+                 "(counter-clockwise)", default=0.0),
+        Quantity("base_motion", "1", "fixed base, or the additional rocker's base turning "
+                 "with the main rocker (GUIM-1)", default="fixed",
+                 choices={"fixed": BASE_FIXED, "rotating": BASE_ROTATING}),
+        Quantity("base_omega", "rad s-1", "main rocker angular velocity (Omega_b), held "
+                 "over the cycle", "Ω_b", default=0.0, used_when=_ROTATING),
+        Quantity("base_epsilon", "rad s-2", "main rocker angular acceleration (E_b), held "
+                 "over the cycle", "E_b", default=0.0, used_when=_ROTATING),
+        Quantity("crank_pivot_x", "m", "crank pivot A relative to the main rocker pivot O, "
+                 "along the base", default=0.0, used_when=_ROTATING),
+        Quantity("crank_pivot_y", "m", "crank pivot A relative to the main rocker pivot O, "
+                 "across the base", default=0.0, used_when=_ROTATING),
+    ),
+    outputs=(
+        Output("force_peak_A", "N", "peak |F14| at the crank pivot A over a cycle",
+               "|F14|max", _WINDOWED),
+        Output("force_peak_B", "N", "peak |F21| at the crank pin B over a cycle",
+               "|F21|max", _WINDOWED),
+        Output("force_peak_C", "N", "peak |F32| at the coupler-rocker joint C over a cycle",
+               "|F32|max", _WINDOWED),
+        Output("force_peak_D", "N", "peak |F34| at the rocker pivot D over a cycle",
+               "|F34|max", _WINDOWED),
+        Output("balancing_moment_peak", "N m", "peak |M_b| over a cycle (balancing "
+               "moment)", "|M_b|max"),
+        Output("balancing_moment_rms", "N m", "RMS of the balancing moment over a cycle"),
+        Output("cycle_work", "J", "work of the balancing moment per cycle (integral of M_b "
+               "dphi1 along the motion)", "∮M_b dφ1", "equals the kinetic energy lost at "
+               "impact for constant omega1 on the impact branch"),
+        Output("assembly_branch", "1", "assembly branch used (sigma)", "σ",
+               flags=BRANCH_FLAGS, undetermined="undetermined"),
+    ),
+    profiles=(
+        Output("F21_n", "N", "crank pin force on the coupler along the coupler "
+               "(F21 normal)", "F21^n"),
+        Output("F21_t", "N", "crank pin force on the coupler across the coupler "
+               "(F21 tangential)", "F21^τ"),
+        Output("F34_n", "N", "base force on the rocker along the rocker (F34 normal)",
+               "F34^n"),
+        Output("F34_t", "N", "base force on the rocker across the rocker (F34 tangential)",
+               "F34^τ"),
+        Output("F32_n", "N", "coupler force on the rocker along the rocker (F32 normal)",
+               "F32^n"),
+        Output("F32_t", "N", "coupler force on the rocker across the rocker "
+               "(F32 tangential)", "F32^τ"),
+        Output("F14_n", "N", "base force on the crank along the crank (F14 normal)",
+               "F14^n"),
+        Output("F14_t", "N", "base force on the crank across the crank (F14 tangential)",
+               "F14^τ"),
+        Output("balancing_moment", "N m", "balancing moment on the crank (M_b, virtual "
+               "work)", "M_b"),
+    ),
+    profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1), from A->D", "φ1"),
+    profile_coordinate=lambda method: profile_angles(method.profile_points),
+    status=("ok", "not_assemblable", "special_position", "nonfinite", "degenerate",
+            "second_special_position", "no_special_position"),
+    usable=("special_position", "second_special_position"),
+    method=(
+        geometry_tol("the special-position window"),
+        Quantity("special_window", "rad", "half-width of the window around a special "
+                 "position excluded from peaks (delta)", "δ", default=0.01, minimum=0.0,
+                 maximum=0.5, min_inclusive=False),
+        Quantity("quadrature_points", "1", "Gauss-Legendre points for the cycle work and "
+                 "RMS", default=200, minimum=2, maximum=5000, integer=True),
+        Quantity("peak_samples", "1", "crank angles sampled to find each peak, which is "
+                 "then refined to the exact maximum", default=361, minimum=3,
+                 maximum=10**6, integer=True),
+        Quantity("profile_points", "1", "crank angles of the profiles (0: no profiles)",
+                 default=0, minimum=0, maximum=100000, integer=True),
+    ),
+)
+P = DECLARATION.parameter_index
+O = DECLARATION.output_index
+F = DECLARATION.profile_index
+S = DECLARATION.status_codes
+
+#: the quantities whose peaks are outputs, and their output rows
+PEAK_A, PEAK_B, PEAK_C, PEAK_D, PEAK_MB = range(5)
+N_PEAKS = 5
+PEAK_ROWS = (O.force_peak_A, O.force_peak_B, O.force_peak_C, O.force_peak_D,
+             O.balancing_moment_peak)
+#: outputs that must be finite for a point to be ok
+CHECKED_ROWS = PEAK_ROWS + (O.balancing_moment_rms, O.cycle_work)
 
 #: layout of the per-angle result vector of ``joint_forces``
 R_F14X, R_F14Y, R_F21X, R_F21Y, R_F32X, R_F32Y, R_F34X, R_F34Y = range(8)
@@ -68,7 +189,7 @@ def _cross(ax, ay, bx, by):
 @njit(**KERNEL_OPTIONS)
 def joint_forces(phi1, pr, sigma, res, snap=0.0):
     """Joint reactions and balancing moment at crank angle phi1 (see _joint_forces)."""
-    tilt, g = pr[18], pr[19]
+    tilt, g = pr[P.tilt], pr[P.g]
     return _joint_forces(phi1, pr, sigma, res, snap, -g * math.sin(tilt), -g * math.cos(tilt))
 
 
@@ -76,25 +197,26 @@ def joint_forces(phi1, pr, sigma, res, snap=0.0):
 def _joint_forces(phi1, pr, sigma, res, snap, gx, gy):
     """Joint reactions and balancing moment at crank angle phi1 (linkages.md §5.3).
 
-    pr holds one point's parameters in the order of PARAMETERS; res (length N_RESULT) gets the
+    pr holds one point's parameters (rows P of the declaration); res (length N_RESULT) gets the
     vectors F14, F21, F32, F34 (force on link i by link j, mechanism frame), M_b from virtual
     work and from the reactions, and the normal/tangential components relative to the coupler
     (F21), rocker (F34, F32) and crank (F14). Returns False where the loop cannot close.
     snap: see kernels.fourbar.dyad_factors (the point kernel passes geometry_tol).
     (gx, gy): gravity in the base frame, -g (sin tilt, cos tilt), computed once per point.
     """
-    l0, l1, l2, l3 = pr[0], pr[1], pr[2], pr[3]
-    m1, m2, m3 = pr[4], pr[5], pr[6]
-    p1, p2, p3 = pr[7] * l1, pr[8] * l2, pr[9] * l3  # centroid along each link [m]
-    q1, q2, q3 = pr[10], pr[11], pr[12]
-    j1, j2, j3 = pr[13], pr[14], pr[15]
-    w1, e1 = pr[16], pr[17]
-    f_t, f_n, arm, m_ext = pr[21], pr[22], pr[23], pr[24]
-    rotating = pr[25] == BASE_ROTATING
-    wb = pr[26] if rotating else 0.0
-    eb = pr[27] if rotating else 0.0
-    oax = pr[28] if rotating else 0.0
-    oay = pr[29] if rotating else 0.0
+    l0, l1, l2, l3 = pr[P.l0], pr[P.l1], pr[P.l2], pr[P.l3]
+    m1, m2, m3 = pr[P.m1], pr[P.m2], pr[P.m3]
+    p1, p2, p3 = pr[P.s1] * l1, pr[P.s2] * l2, pr[P.s3] * l3  # centroid along each link [m]
+    q1, q2, q3 = pr[P.q1], pr[P.q2], pr[P.q3]
+    j1, j2, j3 = pr[P.J1], pr[P.J2], pr[P.J3]
+    w1, e1 = pr[P.omega1], pr[P.epsilon1]
+    f_t, f_n = pr[P.external_force], pr[P.external_force_normal]
+    arm, m_ext = pr[P.external_force_arm], pr[P.external_moment]
+    rotating = pr[P.base_motion] == BASE_ROTATING
+    wb = pr[P.base_omega] if rotating else 0.0
+    eb = pr[P.base_epsilon] if rotating else 0.0
+    oax = pr[P.crank_pivot_x] if rotating else 0.0
+    oay = pr[P.crank_pivot_y] if rotating else 0.0
 
     c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(phi1, l0, l1, l2, l3,
                                                                        sigma, snap)
@@ -185,14 +307,14 @@ def _joint_forces(phi1, pr, sigma, res, snap, gx, gy):
 
 @njit(**KERNEL_OPTIONS)
 def _peak_quantity(q, res):
-    """|F_A|, |F_B|, |F_C|, |F_D| or |M_b| from a kinetostatic solution."""
-    if q == 0:
+    """|F_A|, |F_B|, |F_C|, |F_D| or |M_b| (q = PEAK_A ... PEAK_MB) from a solution."""
+    if q == PEAK_A:
         return math.sqrt(res[R_F14X] ** 2 + res[R_F14Y] ** 2)
-    if q == 1:
+    if q == PEAK_B:
         return math.sqrt(res[R_F21X] ** 2 + res[R_F21Y] ** 2)
-    if q == 2:
+    if q == PEAK_C:
         return math.sqrt(res[R_F32X] ** 2 + res[R_F32Y] ** 2)
-    if q == 3:
+    if q == PEAK_D:
         return math.sqrt(res[R_F34X] ** 2 + res[R_F34Y] ** 2)
     return abs(res[R_MB])
 
@@ -227,11 +349,11 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     for k in range(prof.shape[0]):
         for j in range(prof.shape[1]):
             prof[k, j] = nan
-    l0, l1, l2, l3 = pr[0], pr[1], pr[2], pr[3]
-    w1 = pr[16]
+    l0, l1, l2, l3 = pr[P.l0], pr[P.l1], pr[P.l2], pr[P.l3]
+    w1 = pr[P.omega1]
     direction = -1.0 if w1 < 0.0 else 1.0
     if not crank_turns_fully(l0, l1, l2, l3, tol):
-        return st.NOT_ASSEMBLABLE
+        return S.not_assemblable
     mask = change_point_identities(l0 / l1, l2 / l1, l3 / l1, tol)
     count = (mask & 1) + ((mask >> 1) & 1) + ((mask >> 2) & 1)
     kind = 0
@@ -241,16 +363,16 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
         kind = CHANGE_POINT_B
     elif mask & CHANGE_POINT_C:
         kind = CHANGE_POINT_C
-    sigma = pr[20]
+    sigma = pr[P.sigma]
     if sigma == SIGMA_IMPACT:
         if kind == 0:
-            return st.NO_SPECIAL_POSITION  # no impact branch to choose: give sigma
+            return S.no_special_position  # no impact branch to choose: give sigma
         sigma = impact_branch(kind, direction)
-    out[7] = sigma
+    out[O.assembly_branch] = sigma
     if kind != 0 and kind != CHANGE_POINT_C and abs(l0 - l1) <= tol * (l0 + l1 + l2 + l3):
-        return st.DEGENERATE
+        return S.degenerate
     start = math.pi if kind == CHANGE_POINT_C else 0.0  # cycle (phi1*, phi1* + 2 pi)
-    gx, gy = -pr[19] * math.sin(pr[18]), -pr[19] * math.cos(pr[18])  # gravity, base frame
+    gx, gy = -pr[P.g] * math.sin(pr[P.tilt]), -pr[P.g] * math.cos(pr[P.tilt])  # base frame
 
     # cycle work and RMS of M_b: Gauss-Legendre on the open cycle, one-sided at the node
     half = math.pi
@@ -258,30 +380,30 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     square = 0.0
     for k in range(gl_x.shape[0]):
         if not _joint_forces(start + half * (gl_x[k] + 1.0), pr, sigma, res, tol, gx, gy):
-            return st.NOT_ASSEMBLABLE
+            return S.not_assemblable
         work += half * gl_w[k] * res[R_MB]
         square += half * gl_w[k] * res[R_MB] * res[R_MB]
-    out[5] = math.sqrt(square / (2.0 * math.pi))
-    out[6] = direction * work  # energy delivered by the drive per cycle
+    out[O.balancing_moment_rms] = math.sqrt(square / (2.0 * math.pi))
+    out[O.cycle_work] = direction * work  # energy delivered by the drive per cycle
 
     # peaks outside |phi1 - node| < window (H11: F^n ~ 1/dphi1): a uniform sample finds
     # each maximum's basin, golden section on the exact kinetostatics refines it
     lo = start + (window if kind != 0 else 0.0)
     hi = start + 2.0 * math.pi - (window if kind != 0 else 2.0 * math.pi / n_peak)
     spacing = (hi - lo) / (n_peak - 1)
-    best = np.full(5, -1.0)
-    where = np.zeros(5)
+    best = np.full(N_PEAKS, -1.0)
+    where = np.zeros(N_PEAKS)
     for k in range(n_peak):
         phi = lo + spacing * k
         if count > 1 and abs(phi - start - math.pi) < window:
             continue  # the second node at phi1* + pi (H10)
         if not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
-            return st.NOT_ASSEMBLABLE
-        for q in range(5):
+            return S.not_assemblable
+        for q in range(N_PEAKS):
             value = _peak_quantity(q, res)
             if value > best[q]:
                 best[q], where[q] = value, phi
-    for q in range(5):
+    for q in range(N_PEAKS):
         a, b = where[q] - spacing, where[q] + spacing
         if kind != 0:  # stay out of the node's window (a smooth cycle is periodic)
             a, b = max(lo, a), min(hi, b)
@@ -290,7 +412,7 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
                 b = min(b, start + math.pi - window)
             else:
                 a = max(a, start + math.pi + window)
-        out[q] = _refine_peak(q, a, b, best[q], pr, sigma, res, tol, gx, gy)
+        out[PEAK_ROWS[q]] = _refine_peak(q, a, b, best[q], pr, sigma, res, tol, gx, gy)
 
     # profiles: the rigid-model values at every sampled angle (NaN only exactly at a node)
     for j in range(prof_angles.shape[0]):
@@ -304,20 +426,20 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
                 at_node = True
         if at_node or not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
             continue
-        prof[0, j], prof[1, j] = res[R_F21N], res[R_F21T]
-        prof[2, j], prof[3, j] = res[R_F34N], res[R_F34T]
-        prof[4, j], prof[5, j] = res[R_F32N], res[R_F32T]
-        prof[6, j], prof[7, j] = res[R_F14N], res[R_F14T]
-        prof[8, j] = res[R_MB]
+        prof[F.F21_n, j], prof[F.F21_t, j] = res[R_F21N], res[R_F21T]
+        prof[F.F34_n, j], prof[F.F34_t, j] = res[R_F34N], res[R_F34T]
+        prof[F.F32_n, j], prof[F.F32_t, j] = res[R_F32N], res[R_F32T]
+        prof[F.F14_n, j], prof[F.F14_t, j] = res[R_F14N], res[R_F14T]
+        prof[F.balancing_moment, j] = res[R_MB]
 
-    for k in range(7):
+    for k in CHECKED_ROWS:
         if not math.isfinite(out[k]):
-            return st.NONFINITE
+            return S.nonfinite
     if count > 1:
-        return st.SECOND_SPECIAL_POSITION
+        return S.second_special_position
     if kind != 0:
-        return st.SPECIAL_POSITION  # peaks are windowed: the rigid-model supremum is infinite
-    return st.OK
+        return S.special_position  # peaks are windowed: the rigid-model supremum is infinite
+    return S.ok
 
 
 @njit(**KERNEL_OPTIONS)
@@ -344,15 +466,15 @@ def profile_angles(n):
     return 2.0 * np.pi * (np.arange(n) + 0.5) / n if n > 0 else np.empty(0)
 
 
-def linkage_forces_run(params, method):
-    """Registry entry point: (outputs, status, profiles[n_profiles, n, n_angles])."""
-    tol, window = method[0], method[1]
-    gl_x, gl_w = np.polynomial.legendre.leggauss(int(method[2]))
-    angles = profile_angles(int(method[4]))
+def run(params, method):
+    """Entry point: (outputs, status, profiles[n_profiles, n, n_angles])."""
+    gl_x, gl_w = np.polynomial.legendre.leggauss(method.quadrature_points)
+    angles = profile_angles(method.profile_points)
     n = params.shape[1]
-    out = np.empty((len(OUTPUTS), n))
+    out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
-    prof = np.empty((len(PROFILES), n, angles.shape[0]))
-    linkage_forces_block(np.ascontiguousarray(params), tol, window, gl_x, gl_w,
-                         int(method[3]), angles, out, status, prof)
+    prof = np.empty((len(F), n, angles.shape[0]))
+    linkage_forces_block(np.ascontiguousarray(params), method.geometry_tol,
+                         method.special_window, gl_x, gl_w, method.peak_samples, angles, out,
+                         status, prof)
     return out, status, prof

@@ -20,13 +20,21 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels import status as st
+from kernels.status import CODES
 from kernels.elementary import golden_points, golden_shrink
 
 MODEL_PAPER, MODEL_RIGID = 0, 1
 #: meanings of the codes of the ``regime`` output (CF flag_meanings, in this order)
 REGIMES = ("period_1", "period_n", "quasi_periodic", "escape", "chatter", "no_impact")
-REGIME_PERIOD_1, REGIME_ESCAPE = REGIMES.index("period_1"), REGIMES.index("escape")
+(REGIME_PERIOD_1, REGIME_PERIOD_N, REGIME_QUASI_PERIODIC, REGIME_ESCAPE, REGIME_CHATTER,
+ REGIME_NO_IMPACT) = range(len(REGIMES))
+#: the slots of the case row every steady-state driver fills (in omega1 units): regime,
+#: amplitude, frequency ratio n, impact interval [rotor rad], striker normal speed at impact
+#: [omega1 l2], impacts to converge, peak |psi''| [omega1^2], R_crit, steps, events, method
+#: used, mean rotor speed [omega1], rejected steps
+(ROW_REGIME, ROW_AMPLITUDE, ROW_FREQUENCY, ROW_INTERVAL, ROW_SPEED, ROW_IMPACTS, ROW_ACCEL,
+ ROW_RCRIT, ROW_STEPS, ROW_EVENTS, ROW_METHOD, ROW_ROTOR_SPEED, ROW_REJECTED) = range(13)
+N_ROW = 13
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(96)  # for the half-period quadrature
 
@@ -569,6 +577,9 @@ def _flight(model, psi0, dpsi0, level, k, xi, kappa, method, rtol, atol, dt, max
 # ------------------------------------------------------------------ the mechanism kernel
 
 INTEGRATOR_AUTO, INTEGRATOR_CLOSED, INTEGRATOR_RK4, INTEGRATOR_DOPRI5 = 0, 1, 2, 3
+#: what steady_state returns (kernels.status codes)
+OK, ESCAPE, MAX_STEPS, STEP_UNDERFLOW = (CODES[s] for s in ("ok", "escape", "max_steps",
+                                                            "step_underflow"))
 USED_CLOSED, USED_RK4, USED_DOPRI5 = 0, 1, 2
 
 
@@ -583,33 +594,31 @@ def _critical(model, k, xi, kappa):
 @njit(**KERNEL_OPTIONS)
 def dimensionless(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts, out):
     """Steady state of the impact regime in omega1 units (see steady_state)."""
-    return steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts, out,
-                        np.zeros(1))
+    return steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts, out)
 
 
 @njit(**KERNEL_OPTIONS)
-def steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts, out,
-                 rejected):
+def steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts, out):
     """Steady state of the impact regime in omega1 units; returns the kernel status.
 
-    out: regime, amplitude, n, tau1 (impact interval), v* (pre-impact speed), impacts to
-    converge (or to escape), peak |psi''|, R_crit, steps, events, method used.
+    out: the case row (ROW_*); ROW_SPEED holds the pre-impact psi' v* here.
     """
     for j in range(out.shape[0]):
         out[j] = math.nan
+    out[ROW_REJECTED] = 0.0
     v_crit = _critical(model, k, xi, kappa)
     r_crit = (v_crit - (1.0 + k)) / (v_crit + (1.0 + k))
-    out[7] = r_crit if r_crit > 0.0 else math.nan  # no periodic regime at any R: NaN
+    out[ROW_RCRIT] = r_crit if r_crit > 0.0 else math.nan  # no periodic regime at any R: NaN
     tol = 1e-12 if integrator <= INTEGRATOR_CLOSED else max(10.0 * rtol, 1e-12)
     count, escaped = impacts_to_converge(k, r, v_crit, tol)
     if integrator <= INTEGRATOR_CLOSED:  # the closed-form path (auto picks it here)
-        out[10] = USED_CLOSED
-        out[5] = count
-        out[8] = 0.0
-        out[9] = 0.0
+        out[ROW_METHOD] = USED_CLOSED
+        out[ROW_IMPACTS] = count
+        out[ROW_STEPS] = 0.0
+        out[ROW_EVENTS] = 0.0
         if escaped:
-            out[0] = REGIME_ESCAPE
-            return st.ESCAPE
+            out[ROW_REGIME] = REGIME_ESCAPE
+            return ESCAPE
         v = steady_state_speed(k, r)
         if model == MODEL_PAPER:
             amp = paper_amplitude(v, k, xi)
@@ -617,11 +626,12 @@ def steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts
             acc = paper_peak_acceleration(v, k, xi, amp)
         else:
             amp, tau1, acc = rigid_flight(v, kappa * k)
-        out[0], out[1], out[2], out[3], out[4], out[6] = (REGIME_PERIOD_1, amp, math.pi / tau1,
-                                                          tau1, v, acc)
-        return st.OK
+        out[ROW_REGIME], out[ROW_AMPLITUDE] = REGIME_PERIOD_1, amp
+        out[ROW_FREQUENCY], out[ROW_INTERVAL] = math.pi / tau1, tau1
+        out[ROW_SPEED], out[ROW_ACCEL] = v, acc
+        return OK
     method = METHOD_RK4 if integrator == INTEGRATOR_RK4 else METHOD_DOPRI5
-    out[10] = USED_RK4 if method == METHOD_RK4 else USED_DOPRI5
+    out[ROW_METHOD] = USED_RK4 if method == METHOD_RK4 else USED_DOPRI5
     steps = events = 0
     speeds = np.zeros(3)  # pre-impact speeds v_0 = 0 (from rest), v_1, v_2 integrated
     v = 0.0
@@ -629,29 +639,32 @@ def steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts
     for j in range(1, int(max_impacts) + 1):
         launch = (1.0 + k) * (1.0 + r) + r * v
         if launch >= v_crit:  # closed-form criterion, not a horizon (H1, H2, H12)
-            out[0], out[5], out[8], out[9] = REGIME_ESCAPE, j, steps, events
-            return st.ESCAPE
+            out[ROW_REGIME], out[ROW_IMPACTS] = REGIME_ESCAPE, j
+            out[ROW_STEPS], out[ROW_EVENTS] = steps, events
+            return ESCAPE
         status, tau1, v_new, amp, acc, n_ok, n_bad = integrate_flight(
             model, launch, k, xi, kappa, method, rtol, atol, dt, 1000000, final or r == 0.0)
         steps += n_ok + n_bad
-        rejected[0] += n_bad
+        out[ROW_REJECTED] += n_bad
         events += 1
         if status == FLIGHT_ESCAPE:
-            out[0], out[5], out[8], out[9] = REGIME_ESCAPE, j, steps, events
-            return st.ESCAPE
+            out[ROW_REGIME], out[ROW_IMPACTS] = REGIME_ESCAPE, j
+            out[ROW_STEPS], out[ROW_EVENTS] = steps, events
+            return ESCAPE
         if status != FLIGHT_IMPACT:
-            out[8], out[9] = steps, events
-            return st.STEP_UNDERFLOW if status == FLIGHT_UNDERFLOW else st.MAX_STEPS
+            out[ROW_STEPS], out[ROW_EVENTS] = steps, events
+            return STEP_UNDERFLOW if status == FLIGHT_UNDERFLOW else MAX_STEPS
         converged = r == 0.0 or abs(v_new - v) <= tol * v_new
         if converged:
             if not final and r != 0.0:
                 final = True  # converged on a transient flight: one more, peak refined
                 v = v_new
                 continue
-            out[0], out[1], out[2], out[3], out[4] = (REGIME_PERIOD_1, amp, math.pi / tau1,
-                                                      tau1, v_new)
-            out[5], out[6], out[8], out[9] = count, acc, steps, events
-            return st.OK
+            out[ROW_REGIME], out[ROW_AMPLITUDE] = REGIME_PERIOD_1, amp
+            out[ROW_FREQUENCY], out[ROW_INTERVAL], out[ROW_SPEED] = math.pi / tau1, tau1, v_new
+            out[ROW_IMPACTS], out[ROW_ACCEL] = count, acc
+            out[ROW_STEPS], out[ROW_EVENTS] = steps, events
+            return OK
         if j <= 2:
             speeds[j] = v_new
         if j == 2:
@@ -665,8 +678,8 @@ def steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt, max_impacts
         elif final:
             final = False  # it was not: keep iterating the map
         v = v_new
-    out[8], out[9] = steps, events
-    return st.MAX_STEPS
+    out[ROW_STEPS], out[ROW_EVENTS] = steps, events
+    return MAX_STEPS
 
 
 @njit(**KERNEL_OPTIONS)

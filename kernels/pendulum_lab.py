@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
+from kernels.pendulum import *  # noqa: F401,F403  (ROW_*, REGIME_*)
 from kernels.pendulum import (METHOD_DOPRI5, SUBSTEP_SAMPLES, _hermite, _refine_peak,
                               accepted_step_size, acceleration, attempt_step,
                               classify_period, hermite_slope, illinois, initial_step,
@@ -260,14 +261,14 @@ def _constraint_psi(level, tau, psi_guess, k):
 def flight_outcome(status, n_sec, steps, events, regimes, out):
     """What a blade flight's status means for the steady-state search: -1 to go on (a
     contact), else the kernel's return code, with out filled (escape, no_impact, failure)."""
-    out[8], out[9] = steps, events
+    out[ROW_STEPS], out[ROW_EVENTS] = steps, events
     if status == LAB_CONTACT:
         return -1
     if status == LAB_ESCAPE:
-        out[0], out[5] = regimes[3], n_sec
+        out[ROW_REGIME], out[ROW_IMPACTS] = REGIME_ESCAPE, n_sec
         return 1
     if status == LAB_NO_IMPACT:
-        out[0], out[5] = regimes[5], n_sec
+        out[ROW_REGIME], out[ROW_IMPACTS] = REGIME_NO_IMPACT, n_sec
         return 0
     return 3 if status == LAB_UNDERFLOW else 2
 
@@ -296,7 +297,7 @@ def lab_steady(model, k, xi, kappa, r, window, method, rtol, atol, dt, max_impac
     level, side = 0.0, 1.0  # on the blade's working face, arrived from behind
     gdot = 1.0  # G'- of the first impact: the striker arrives with the rotor's speed
     steps = events = 0
-    out[12] = 0.0  # rejected steps
+    out[ROW_REJECTED] = 0.0  # rejected steps
     n_sec = 0
     zeno_since = 0.0
     amp_since, peak_since = 0.0, 0.0
@@ -349,7 +350,7 @@ def lab_steady(model, k, xi, kappa, r, window, method, rtol, atol, dt, max_impac
          n_bad) = lab_flight(model, t, psi, dpsi, lower, window, k, xi, kappa, method, rtol,
                              atol, dt, 10**6, horizon)
         steps += n_ok + n_bad
-        out[12] += n_bad
+        out[ROW_REJECTED] += n_bad
         events += 1 + passes
         amp_since, peak_since = max(amp_since, amp), max(peak_since, peak)
         flight_time = t_new - t
@@ -358,12 +359,12 @@ def lab_steady(model, k, xi, kappa, r, window, method, rtol, atol, dt, max_impac
         if code >= 0:
             return code
         gdot = 1.0 + h_ratio(psi, k) * dpsi
-    out[8], out[9] = steps, events
+    out[ROW_STEPS], out[ROW_EVENTS] = steps, events
     if not finished:
         return 2
     if p == 0:
-        out[5] = max_impacts
-        out[0] = regimes[2]
+        out[ROW_IMPACTS] = max_impacts
+        out[ROW_REGIME] = REGIME_QUASI_PERIODIC
         return 0
     first = n_sec - 1 - p  # the section impact that starts the last full cycle
     cycle = t_span = speed = amp = peak = zeno = 0.0
@@ -374,12 +375,13 @@ def lab_steady(model, k, xi, kappa, r, window, method, rtol, atol, dt, max_impac
         peak = max(peak, cycle_info[q, 3])
         zeno = max(zeno, cycle_info[q, 4])
     cycle = t_span / p
-    out[0] = regimes[4] if zeno > 0.0 else (regimes[0] if p == 1 else regimes[1])
-    out[1] = amp
-    out[2] = math.nan  # no single free-oscillation frequency: flights end on the blade
-    out[3] = cycle
-    out[4] = speed / p
-    out[5] = n_sec - 1 - 2 * p + 1
-    out[6] = peak
-    out[11] = 1.0
+    out[ROW_REGIME] = (REGIME_CHATTER if zeno > 0.0 else
+                       REGIME_PERIOD_1 if p == 1 else REGIME_PERIOD_N)
+    out[ROW_AMPLITUDE] = amp
+    out[ROW_FREQUENCY] = math.nan  # no single free frequency: flights end on the blade
+    out[ROW_INTERVAL] = cycle
+    out[ROW_SPEED] = speed / p
+    out[ROW_IMPACTS] = n_sec - 1 - 2 * p + 1
+    out[ROW_ACCEL] = peak
+    out[ROW_ROTOR_SPEED] = 1.0
     return 0

@@ -17,6 +17,7 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS
 from kernels.elementary import golden_points, golden_shrink
+from kernels.pendulum import *  # noqa: F401,F403  (ROW_*, REGIME_*)
 from kernels.pendulum import (_first_crossing, accepted_step_size, classify_period,
                               initial_step, next_step, turning_time)
 
@@ -73,9 +74,10 @@ def rotor_impact(w, dpsi, k, xi, j1, lam, r):
 
 
 @njit(**KERNEL_OPTIONS)
-def _rhs(y, k, xi, j1, slope, idle, out):
+def _rhs(y, k, xi, j1, slope, idle, dy):
+    """dy = y' for the state y = (phi1, phi1', psi, psi')."""
     a1, b2 = rotor_accelerations(y[1], y[2], y[3], k, xi, j1, slope, idle)
-    out[0], out[1], out[2], out[3] = y[1], a1, y[3], b2
+    dy[0], dy[1], dy[2], dy[3] = y[1], a1, y[3], b2
 
 
 @njit(**KERNEL_OPTIONS)
@@ -319,7 +321,7 @@ def rotor_steady(k, xi, kappa, r, j1, slope, idle, method, rtol, atol, dt, max_i
     y = np.empty(4)
     w, v = idle, 0.0
     steps = events = 0
-    out[12] = 0.0  # rejected steps
+    out[ROW_REJECTED] = 0.0  # rejected steps
     p = 0
     j = 0
     for j in range(max_impacts + 1):
@@ -331,19 +333,20 @@ def rotor_steady(k, xi, kappa, r, j1, slope, idle, method, rtol, atol, dt, max_i
         if not v_plus < 0.0:
             # the impact throws the rotor back and the pendulum does not leave the stop:
             # the rotor is too light for the rotor-stop idealisation
-            out[5], out[8], out[9] = j + 1, steps, events
+            out[ROW_IMPACTS], out[ROW_STEPS], out[ROW_EVENTS] = j + 1, steps, events
             return 4
         y[0], y[1], y[2], y[3] = 0.0, w_plus, 0.0, v_plus
         status, tau, amp, acc, n_ok, n_bad = rotor_flight(
             y, k_cm, xi, j1, slope, idle, method, rtol, atol, dt, 10**6, False)
         steps += n_ok + n_bad
-        out[12] += n_bad
+        out[ROW_REJECTED] += n_bad
         events += 1
         if status == FLIGHT_ESCAPE:
-            out[0], out[5], out[8], out[9] = regimes[3], j + 1, steps, events
+            out[ROW_REGIME], out[ROW_IMPACTS] = REGIME_ESCAPE, j + 1
+            out[ROW_STEPS], out[ROW_EVENTS] = steps, events
             return 1
         if status != FLIGHT_IMPACT:
-            out[8], out[9] = steps, events
+            out[ROW_STEPS], out[ROW_EVENTS] = steps, events
             return 3 if status == FLIGHT_UNDERFLOW else 2
         w, v = y[1], y[3]
     if p == 0:
@@ -351,13 +354,13 @@ def rotor_steady(k, xi, kappa, r, j1, slope, idle, method, rtol, atol, dt, max_i
         n = max_impacts + 1
         recent = abs(history[n - 1, 1] - history[n - 2, 1])
         older = abs(history[n // 2, 1] - history[n // 2 - 1, 1]) if n >= 4 else 0.0
-        out[8], out[9], out[5] = steps, events, max_impacts
+        out[ROW_STEPS], out[ROW_EVENTS], out[ROW_IMPACTS] = steps, events, max_impacts
         if n >= 20 and recent > 0.1 * older:
-            out[0] = regimes[2]
+            out[ROW_REGIME] = REGIME_QUASI_PERIODIC
             return 0
         return 2
-    out[0] = regimes[0] if p == 1 else regimes[1]
-    out[5] = j - 2 * p + 1
+    out[ROW_REGIME] = REGIME_PERIOD_1 if p == 1 else REGIME_PERIOD_N
+    out[ROW_IMPACTS] = j - 2 * p + 1
     start_w, start_v = w, v
     if p == 1 and j >= 2:
         # the iteration stops at |x_j - x_j-1| <= 10 rtol, which leaves rho/(1 - rho) times
@@ -378,11 +381,11 @@ def rotor_steady(k, xi, kappa, r, j1, slope, idle, method, rtol, atol, dt, max_i
             status, tau, amp, acc, n_ok, n_bad = rotor_flight(
                 y, k_cm, xi, j1, slope, idle, method, rtol, atol, dt, 10**6, True)
             steps += n_ok + n_bad
-            out[12] += n_bad
+            out[ROW_REJECTED] += n_bad
             events += 1
             if status != FLIGHT_IMPACT:  # the cycle did not repeat after all
-                out[0] = math.nan
-                out[8], out[9] = steps, events
+                out[ROW_REGIME] = math.nan
+                out[ROW_STEPS], out[ROW_EVENTS] = steps, events
                 return 2
             amp_max, acc_max = max(amp_max, amp), max(acc_max, acc)
             rotor_angle += y[0]
@@ -392,11 +395,11 @@ def rotor_steady(k, xi, kappa, r, j1, slope, idle, method, rtol, atol, dt, max_i
         if residual <= last_step or (start_w == w and start_v == v):
             break
         start_w, start_v = w, v  # the extrapolation did not help (e.g. a spiralling map)
-    out[1] = amp_max
-    out[2] = math.pi * p / flight_time
-    out[3] = rotor_angle / p
-    out[4] = speed / p
-    out[6] = acc_max
-    out[8], out[9] = steps, events
-    out[11] = rotor_angle / flight_time
+    out[ROW_AMPLITUDE] = amp_max
+    out[ROW_FREQUENCY] = math.pi * p / flight_time
+    out[ROW_INTERVAL] = rotor_angle / p
+    out[ROW_SPEED] = speed / p
+    out[ROW_ACCEL] = acc_max
+    out[ROW_STEPS], out[ROW_EVENTS] = steps, events
+    out[ROW_ROTOR_SPEED] = rotor_angle / flight_time
     return 0

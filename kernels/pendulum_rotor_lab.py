@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
+from kernels.pendulum import *  # noqa: F401,F403  (ROW_*, REGIME_*)
 from kernels.pendulum import (SUBSTEP_SAMPLES, _hermite, accepted_step_size, classify_period,
                               hermite_slope, initial_step, next_step)
 from kernels.pendulum_lab import (LAB_CONTACT, LAB_ESCAPE, LAB_MAX_STEPS, LAB_NO_IMPACT,
@@ -281,7 +282,7 @@ def rotor_lab_steady(k, xi, kappa, r, window, j1, slope, idle, method, rtol, ato
     level, side = 0.0, 1.0  # the blade's working face: the first impact at once
     t = 0.0
     steps = events = 0
-    out[12] = 0.0
+    out[ROW_REJECTED] = 0.0
     n_sec = 0
     p = 0
     finished = False
@@ -325,7 +326,7 @@ def rotor_lab_steady(k, xi, kappa, r, window, j1, slope, idle, method, rtol, ato
          n_bad) = rotor_lab_flight(y, lower, window, k, k_cm, xi, j1, slope, idle, method,
                                    rtol, atol, dt, 10**6, horizon)
         steps += n_ok + n_bad
-        out[12] += n_bad
+        out[ROW_REJECTED] += n_bad
         events += 1 + passes
         amp_since, peak_since = max(amp_since, amp), max(peak_since, peak)
         flight_time = taken
@@ -333,11 +334,11 @@ def rotor_lab_steady(k, xi, kappa, r, window, j1, slope, idle, method, rtol, ato
         code = flight_outcome(status, n_sec, steps, events, regimes, out)
         if code >= 0:
             return code
-    out[8], out[9] = steps, events
+    out[ROW_STEPS], out[ROW_EVENTS] = steps, events
     if not finished:
         return 2
     if p == 0:
-        out[0], out[5] = regimes[2], max_impacts
+        out[ROW_REGIME], out[ROW_IMPACTS] = REGIME_QUASI_PERIODIC, max_impacts
         return 0
     first = n_sec - 1 - p
     span = angle = speed = amp = peak = zeno = 0.0
@@ -347,11 +348,12 @@ def rotor_lab_steady(k, xi, kappa, r, window, j1, slope, idle, method, rtol, ato
         speed += info[q, 2]
         amp, peak = max(amp, info[q, 3]), max(peak, info[q, 4])
         zeno = max(zeno, info[q, 5])
-    out[0] = regimes[4] if zeno > 0.0 else (regimes[0] if p == 1 else regimes[1])
-    out[1] = amp
-    out[3] = angle / p
-    out[4] = speed / p
-    out[5] = n_sec - 1 - 2 * p + 1
-    out[6] = peak
-    out[11] = angle / span
+    out[ROW_REGIME] = (REGIME_CHATTER if zeno > 0.0 else
+                       REGIME_PERIOD_1 if p == 1 else REGIME_PERIOD_N)
+    out[ROW_AMPLITUDE] = amp
+    out[ROW_INTERVAL] = angle / p
+    out[ROW_SPEED] = speed / p
+    out[ROW_IMPACTS] = n_sec - 1 - 2 * p + 1
+    out[ROW_ACCEL] = peak
+    out[ROW_ROTOR_SPEED] = angle / span
     return 0

@@ -20,22 +20,93 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels import status as st
 from kernels.crank_rocker import branch_values, impact_branch
+from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quantity,
+                                 geometry_tol)
 from kernels.elementary import golden_points, golden_shrink
 from kernels.fourbar import CHANGE_POINT_B, crank_turns_fully, vector_kinematics
 
-PARAMETERS = ("lambda2", "lambda3", "mu4", "mu5", "beta", "delta", "direction", "omega1",
-              "crank_length")
-OUTPUTS = (
-    "gamma1", "gamma2", "restitution_kinematic", "transfer_stage1_low",
-    "transfer_stage1_high", "transfer_impact_1", "transfer_impact_2",
-    "transfer_stage1_impact_1", "transfer_stage1_impact_2", "impact_crank_angle_1",
-    "impact_crank_angle_2", "impact_speed_1", "impact_speed_2", "transfer_peak",
-    "transfer2_peak", "assembly_branch_stage2",
+DECLARATION = Mechanism(
+    name="six_link",
+    title="Six-link impact mechanism with alternating branch switching (seed 003)",
+    summary="stage 1 on the smooth path through its node (branch alternation rule), stage 2 "
+            "on the impact branch for the rotation direction; impacts by bisection on "
+            "phi3(phi1); composition u51 = u31 u53; peaks from a uniform sample of the 4 pi "
+            "cycle refined by golden section",
+    references="K. Zh. Ziyaliev, O. K. Chinbaev, Zh. Zh. Dyushembaev, Kinematics of a "
+               "six-link impact mechanism with the largest rocker (in Russian), Issyk-Kul "
+               "State University; the copy received gives no year (the mechanism was "
+               "patented in 2022)",
+    parameters=(
+        Quantity("lambda2", "1", "stage 1 coupler ratio l2/l1 (lambda2)", "λ2", default=1.6,
+                 **POSITIVE),
+        Quantity("lambda3", "1", "stage 1 driven crank ratio l3/l1 (lambda3); the base is "
+                 "lambda6 = 1 - lambda2 + lambda3", "λ3", default=1.3, **POSITIVE),
+        Quantity("mu4", "1", "stage 2 coupler ratio l4/l3 (the paper's second lambda4)",
+                 "λ4 (stage 2)", default=1.5, **POSITIVE),
+        Quantity("mu5", "1", "stage 2 rocker ratio l5/l3 (the paper's lambda5); the base "
+                 "is mu6 = 1 - mu4 + mu5", "λ5", default=2.5, **POSITIVE),
+        Quantity("beta", "rad", "direction of the stage 2 base DE relative to AD (beta)", "β",
+                 default=0.0, minimum=-2 * math.pi, maximum=2 * math.pi),
+        Quantity("delta", "rad", "offset of the stage 2 crank arm on link 3 (delta)", "δ",
+                 default=0.0, minimum=-2 * math.pi, maximum=2 * math.pi),
+        Quantity("direction", "1", "rotation direction of the crank: +1 counter-clockwise",
+                 default=1, choices={1: 1, -1: -1}),
+        Quantity("omega1", "rad s-1", "crank angular speed (|omega1|)", "ω1", default=30.0,
+                 **POSITIVE),
+        Quantity("crank_length", "m", "crank length (l1)", "l1", default=0.1, **POSITIVE),
+    ),
+    outputs=(
+        Output("gamma1", "1", "stage 1 node parameter sqrt(lambda6 lambda2/lambda3) "
+               "(gamma1)", "γ1"),
+        Output("gamma2", "1", "stage 2 node parameter sqrt(mu6 mu4/mu5) (gamma2)", "γ2"),
+        Output("restitution_kinematic", "1", "kinematic restitution coefficient of stage 2 "
+               "(Rk)", "Rk"),
+        Output("transfer_stage1_low", "1", "stage 1 u31 at its special position, low value "
+               "(1 - gamma1)/(1 - lambda6)"),
+        Output("transfer_stage1_high", "1", "stage 1 u31 at its special position, high "
+               "value (1 + gamma1)/(1 - lambda6)"),
+        Output("transfer_impact_1", "1", "u51 at the first impact of the 4 pi cycle", "u51"),
+        Output("transfer_impact_2", "1", "u51 at the second impact of the 4 pi cycle",
+               "u51"),
+        Output("transfer_stage1_impact_1", "1", "stage 1 u31 at the first impact", "u31"),
+        Output("transfer_stage1_impact_2", "1", "stage 1 u31 at the second impact", "u31"),
+        Output("impact_crank_angle_1", "rad", "crank angle of the first impact in "
+               "[0, 4 pi)", "φ1"),
+        Output("impact_crank_angle_2", "rad", "crank angle of the second impact in "
+               "[0, 4 pi)", "φ1"),
+        Output("impact_speed_1", "m s-1", "striker (rocker tip) speed at the first impact"),
+        Output("impact_speed_2", "m s-1", "striker (rocker tip) speed at the second impact"),
+        Output("transfer_peak", "1", "peak |u51| over the 4 pi cycle", "|u51|max"),
+        Output("transfer2_peak", "1", "peak |u'51| over the 4 pi cycle", "|u′51|max"),
+        Output("assembly_branch_stage2", "1", "stage 2 assembly branch (sigma2), the impact "
+               "branch for the rotation direction", "σ2", flags=BRANCH_FLAGS,
+               undetermined="undetermined"),
+    ),
+    profiles=(Output("rocker_angle", "rad", "stage 2 rocker angle (phi5), from the "
+                     "direction D->E, in [0, 2 pi)", "φ5"),),
+    profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1) over the 4 pi cycle",
+                         "φ1"),
+    profile_coordinate=lambda method: profile_angles(method.profile_points),
+    status=("ok", "not_assemblable", "nonfinite"),
+    method=(
+        geometry_tol("the link-length conditions"),
+        Quantity("samples", "1", "crank angles sampled over 4 pi to find each peak, which "
+                 "is then refined to the exact maximum", default=720, minimum=8,
+                 maximum=10**6, integer=True),
+        Quantity("profile_points", "1", "crank angles of the rocker_angle profile over "
+                 "4 pi (0: none)", default=0, minimum=0, maximum=100000, integer=True),
+    ),
 )
-PROFILES = ("rocker_angle",)
-METHOD = ("geometry_tol", "samples", "profile_points")
+O = DECLARATION.output_index
+P = DECLARATION.parameter_index
+S = DECLARATION.status_codes
+ROCKER_ANGLE = DECLARATION.profile_index.rocker_angle
+#: per impact of the 4 pi cycle: rows of u51, stage-1 u31, crank angle, speed
+IMPACT_ROWS = ((O.transfer_impact_1, O.transfer_stage1_impact_1, O.impact_crank_angle_1,
+                O.impact_speed_1),
+               (O.transfer_impact_2, O.transfer_stage1_impact_2, O.impact_crank_angle_2,
+                O.impact_speed_2))
 
 SIGMA1_START = 1.0
 TWO_PI = 2.0 * math.pi
@@ -124,18 +195,18 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
     mu6 = 1.0 - mu4 + mu5
     # §4.1: stage 1 l1 < l3 < l2 with l2 - l3 < l1 (a drag link), stage 2 l3 < l4 < l5
     if not (1.0 < lam3 < lam2 and lam2 - lam3 < 1.0 and 1.0 < mu4 < mu5):
-        return st.NOT_ASSEMBLABLE
+        return S.not_assemblable
     if not (crank_turns_fully(lam6, 1.0, lam2, lam3, tol)
             and crank_turns_fully(mu6, 1.0, mu4, mu5, tol)):
-        return st.NOT_ASSEMBLABLE
+        return S.not_assemblable
     gamma1 = math.sqrt(lam6 * lam2 / lam3)
     gamma2 = math.sqrt(mu6 * mu4 / mu5)
-    out[0], out[1] = gamma1, gamma2
-    out[2] = (1.0 - gamma2) / (1.0 + gamma2)
-    out[3] = (1.0 - gamma1) / (1.0 - lam6)
-    out[4] = (1.0 + gamma1) / (1.0 - lam6)
+    out[O.gamma1], out[O.gamma2] = gamma1, gamma2
+    out[O.restitution_kinematic] = (1.0 - gamma2) / (1.0 + gamma2)
+    out[O.transfer_stage1_low] = (1.0 - gamma1) / (1.0 - lam6)
+    out[O.transfer_stage1_high] = (1.0 + gamma1) / (1.0 - lam6)
     sigma2 = impact_branch(CHANGE_POINT_B, direction)  # link 3 turns with the crank
-    out[15] = sigma2
+    out[O.assembly_branch_stage2] = sigma2
     offset = delta - beta
     before53, after53 = branch_values(CHANGE_POINT_B, mu6, gamma2, sigma2, direction)
 
@@ -151,10 +222,11 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
         if math.isnan(u31) or abs(phi_i - TWO_PI * m) < 1e-12:
             u31 = stage1_node_value(m, lam6, gamma1)  # the impact falls on stage 1's node
         u51 = u31 * before53
-        out[5 + j] = u51
-        out[7 + j] = u31
-        out[9 + j] = phi_i % (2.0 * TWO_PI)
-        out[11 + j] = abs(u51) * w * mu5 * lam3 * l1
+        row_u51, row_u31, row_angle, row_speed = IMPACT_ROWS[j]
+        out[row_u51] = u51
+        out[row_u31] = u31
+        out[row_angle] = phi_i % (2.0 * TWO_PI)
+        out[row_speed] = abs(u51) * w * mu5 * lam3 * l1
         peak = max(peak, abs(u51), abs(u31 * after53))
 
     # peaks of |u51| and |u'51|: a uniform sample of the 4 pi cycle (nodes excluded) finds
@@ -176,7 +248,7 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
     if where2 != 0.0:
         peak2 = _refine_peak(1, where2 - spacing, where2 + spacing, peak2, lam6, lam2, lam3,
                              mu6, mu4, mu5, sigma2, offset, tol)
-    out[13], out[14] = peak, peak2
+    out[O.transfer_peak], out[O.transfer2_peak] = peak, peak2
 
     for j in range(prof_angles.shape[0]):
         phi3 = stage1(prof_angles[j], lam6, lam2, lam3, tol)[0]
@@ -186,8 +258,8 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
 
     for k in range(out.shape[0]):
         if not math.isfinite(out[k]):
-            return st.NONFINITE
-    return st.OK
+            return S.nonfinite
+    return S.ok
 
 
 @njit(**KERNEL_OPTIONS)
@@ -195,13 +267,15 @@ def six_link_block(params, tol, n_samples, prof_angles, out, status, prof):
     out_i = np.empty(out.shape[0])
     prof_i = np.empty(prof.shape[2])
     for i in range(params.shape[1]):
-        status[i] = _point(params[0, i], params[1, i], params[2, i], params[3, i],
-                           params[4, i], params[5, i], params[6, i], params[7, i],
-                           params[8, i], tol, n_samples, prof_angles, out_i, prof_i)
+        status[i] = _point(params[P.lambda2, i], params[P.lambda3, i], params[P.mu4, i],
+                           params[P.mu5, i], params[P.beta, i], params[P.delta, i],
+                           params[P.direction, i], params[P.omega1, i],
+                           params[P.crank_length, i], tol, n_samples, prof_angles, out_i,
+                           prof_i)
         for k in range(out.shape[0]):
             out[k, i] = out_i[k]
         for j in range(prof.shape[2]):
-            prof[0, i, j] = prof_i[j]
+            prof[ROCKER_ANGLE, i, j] = prof_i[j]
 
 
 def profile_angles(n):
@@ -209,13 +283,13 @@ def profile_angles(n):
     return 4.0 * np.pi * (np.arange(n) + 0.5) / n if n > 0 else np.empty(0)
 
 
-def six_link_run(params, method):
-    """Registry entry point: (outputs, status, profiles[1, n, n_angles])."""
-    angles = profile_angles(int(method[2]))
+def run(params, method):
+    """Entry point: (outputs, status, profiles[1, n, n_angles])."""
+    angles = profile_angles(method.profile_points)
     n = params.shape[1]
-    out = np.empty((len(OUTPUTS), n))
+    out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
-    prof = np.empty((1, n, angles.shape[0]))
-    six_link_block(np.ascontiguousarray(params), method[0], int(method[1]), angles, out,
-                   status, prof)
+    prof = np.empty((len(DECLARATION.profiles), n, angles.shape[0]))
+    six_link_block(np.ascontiguousarray(params), method.geometry_tol, method.samples,
+                   angles, out, status, prof)
     return out, status, prof

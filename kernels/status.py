@@ -1,44 +1,29 @@
 """Status codes written by every kernel, one per grid point.
 
-The atlas stores them as CF ``flag_values``/``flag_meanings``; the numbers are stable across
-mechanisms and versions (append new ones, never renumber). Module-level ints are compile-time
-constants for numba.
+The atlas stores them as CF ``flag_values``/``flag_meanings``; each mechanism declares the
+statuses its kernel emits (``kernels.declaration``), and a kernel writes them by name
+(``S.not_assemblable``). The codes are stable across mechanisms and versions: append new
+ones, never renumber. Codes 6 and 7 (``chatter``, ``grazing``) were reserved and never
+emitted: chatter is a regime of the pendulum, not a failed point, and a grazing contact is
+located, not flagged; they are retired, not reused.
 """
 
-OK = 0
-NOT_ASSEMBLABLE = 1  # the links cannot close over a full crank turn
-NO_REAL_SYNTHESIS = 2  # the synthesis equations have no real, positive solution
-WRONG_BRANCH = 3  # the requested assembly branch is not the impact branch (|Rk| > 1)
-SPECIAL_POSITION = 4
-ESCAPE = 5
-CHATTER = 6
-GRAZING = 7
-MAX_STEPS = 8
-STEP_UNDERFLOW = 9
-RESONANCE = 10
-TRUNCATION = 11
-NONFINITE = 12  # a computed value came out non-finite where the model says it exists
-DEGENERATE = 13  # B coincides with D at the special position (linkages.md H9)
-NO_IMPACT = 14  # gamma <= 1: the rocker does not reverse at the special position
-SECOND_SPECIAL_POSITION = 15  # a second change point on the turn (linkages.md H10)
-NO_SPECIAL_POSITION = 16  # a general four-bar that is not a change-point linkage
-
-FLAG_MEANINGS = (
-    "ok",
-    "not_assemblable",
-    "no_real_synthesis",
-    "wrong_branch",
-    "special_position",
-    "escape",
-    "chatter",
-    "grazing",
-    "max_steps",
-    "step_underflow",
-    "resonance",
-    "truncation",
-    "nonfinite",
-    "degenerate",
-    "no_impact",
-    "second_special_position",
-    "no_special_position",
-)
+CODES = {
+    "ok": 0,
+    "not_assemblable": 1,  # the links cannot close over a full crank turn
+    "no_real_synthesis": 2,  # the synthesis equations have no real, positive solution
+    "wrong_branch": 3,  # the requested assembly branch is not the impact branch (|Rk| > 1)
+    "special_position": 4,  # peaks are taken outside a window around a special position
+    "escape": 5,  # the pendulum goes over the top: no periodic impact regime
+    "max_steps": 8,  # the integration or the impact iteration hit its limit
+    "step_underflow": 9,  # the step size fell below round-off
+    "resonance": 10,  # a harmonic sits on a resonance: the steady state does not exist
+    "truncation": 11,  # the harmonic count is too small for the requested tolerance
+    "nonfinite": 12,  # a computed value came out non-finite where the model says it exists
+    "degenerate": 13,  # B on D at the special position; a rotor thrown back by the impact
+    "no_impact": 14,  # gamma <= 1, or the striker never reaches the tool
+    "second_special_position": 15,  # a second change point on the turn
+    "no_special_position": 16,  # a general four-bar that is not a change-point linkage
+}
+#: the meaning of each code
+MEANINGS = {code: name for name, code in CODES.items()}

@@ -44,7 +44,7 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     panels = [None] if not facet_dims else list(range(ds.sizes[facet_dims[0]]))
     fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels) + 1.2, 4.4),
                              squeeze=False, constrained_layout=True)
-    from sweep.atlas import usable_mask
+    from sweep.metadata import usable_mask
 
     values = ds[color].where(usable_mask(ds)) if ok_only else ds[color]
     finite = np.asarray(values.values)[np.isfinite(np.asarray(values.values, dtype=float))]

@@ -59,7 +59,8 @@ def cli():
               help="run on a dask.distributed cluster, e.g. tcp://10.0.0.5:8786")
 def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
     """Run a sweep; with no SPEC, the built-in default (the crank-rocker design atlas)."""
-    from sweep import atlas, spec
+    from sweep import runner, spec, store
+    from sweep.metadata import status_counts
 
     if spec_file is None:
         sweep_spec = spec.parse(_example_text(DEFAULT_EXAMPLE), source="default spec")
@@ -69,7 +70,7 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
         target = Path(output or Path(spec_file).with_suffix(".nc").name)
     if target.suffix != ".nc":
         raise UserError(f"output: {target} must end in .nc")
-    atlas.check_target(target, force or resume)
+    store.check_target(target, force or resume)
     if resume and target.exists():
         raise UserError(f"resume: {target} is already complete")
     chart_path = target.with_suffix(".png") if sweep_spec.chart else None
@@ -77,10 +78,9 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
         raise UserError(f"output: {chart_path} exists; use --force to overwrite it")
 
     started = time.perf_counter()
-    done = atlas.run_sweep(sweep_spec, target, chunk=chunk,
-                           progress=not quiet, workers=workers or sweep_spec.run.workers,
-                           resume=resume, force=force,
-                           scheduler=scheduler or sweep_spec.run.scheduler)
+    done = runner.run_sweep(sweep_spec, target, chunk=chunk, workers=workers,
+                            scheduler=scheduler, progress=not quiet, resume=resume,
+                            force=force)
     elapsed = time.perf_counter() - started
     written = _open_atlas(str(target))
     if chart_path is not None:
@@ -89,7 +89,7 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
         c = sweep_spec.chart
         design_chart(written, c.x, c.y, c.color, chart_path)
     if not quiet:
-        counts = atlas.status_counts(written)
+        counts = status_counts(written)
         click.echo(f"atlas: {target.resolve()}")
         if chart_path is not None:
             click.echo(f"chart: {chart_path.resolve()}")
@@ -125,6 +125,25 @@ def examples(name, output):
 
 
 @cli.command()
+@click.argument("mechanism", required=False)
+def parameters(mechanism):
+    """List the mechanisms, or one mechanism's parameters, method keys, outputs and
+    statuses with units, defaults and allowed values."""
+    from sweep import registry
+
+    if mechanism is None:
+        for name in registry.names():
+            click.echo(f"{name:17s} {registry.get(name).declaration.title}")
+        return
+    if mechanism not in registry.names():
+        raise UserError(f"mechanism: unknown mechanism {mechanism!r}; allowed: "
+                        + ", ".join(registry.names()))
+    from sweep.describe import mechanism_text
+
+    click.echo(mechanism_text(registry.get(mechanism).declaration))
+
+
+@cli.command()
 @click.argument("atlas_file", metavar="ATLAS")
 def info(atlas_file):
     """Dimensions, variables with units, status counts and provenance of an atlas."""
@@ -132,7 +151,7 @@ def info(atlas_file):
 
     import numpy as np
 
-    from sweep.atlas import status_counts
+    from sweep.metadata import status_counts
 
     ds = _open_atlas(atlas_file)
     click.echo(f"{atlas_file}: {ds.attrs.get('title', '')}")

@@ -1,22 +1,20 @@
-"""Lazy grid -> dask blocks -> numba kernel -> xarray Dataset (atlas.md §2).
+"""Lazy grid -> blocks -> numba kernel -> rows of the atlas.
 
-The cartesian product is never built in the client: each dask task receives only its block's
-index ranges, broadcasts the axis slices of that block into the kernel's parameter matrix,
-runs the kernel and returns the selected outputs plus status. Every grid point is computed
-independently, so results are bit-identical whatever the chunk size or thread count.
+The cartesian product is never built: each block receives only its index ranges, broadcasts
+the axis slices of that block into the kernel's parameter matrix (one row per declared
+parameter), runs the kernel with the method options by name, and returns the selected
+outputs plus status. Every grid point is computed independently, so results are
+bit-identical whatever the chunk size or thread count.
 """
 
 from __future__ import annotations
 
 import math
 
-import dask.array as da
 import numpy as np
-import xarray as xr
 
-from sweep.atlas import annotate
+from sweep.metadata import annotate, flag_codes
 from sweep.spec import Sweep
-
 
 MIN_BLOCKS = 8
 
@@ -40,22 +38,27 @@ def choose_chunks(shape: tuple[int, ...], target: int,
     return tuple(chunk)
 
 
+def normalize_chunks(chunk_shape: tuple[int, ...], shape: tuple[int, ...]) -> tuple:
+    """Block lengths along each axis: whole chunks, then the remainder."""
+    return tuple(tuple([c] * (n // c) + ([n % c] if n % c else [])) for c, n in
+                 zip(chunk_shape, shape))
+
+
 def block_parameters(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
     """The kernel's parameter matrix (n_parameters, n_points) for one block of the grid."""
     bshape = tuple(stop - start for start, stop in location)
-    n = math.prod(bshape)
-    params = np.empty((len(sweep.mechanism.parameters), n))
+    params = np.empty((len(sweep.mechanism.parameters), math.prod(bshape)))
     axis_of = {axis.name: j for j, axis in enumerate(sweep.axes)}
-    for k, p in enumerate(sweep.mechanism.parameters):
+    for row, p in enumerate(sweep.mechanism.parameters):
         j = axis_of.get(p.name)
         if j is None:
-            params[k] = sweep.fixed[p.name]
+            params[row] = sweep.fixed[p.name]
             continue
         start, stop = location[j]
         view = [1] * len(bshape)
         view[j] = stop - start
-        params[k] = np.broadcast_to(sweep.axes[j].codes[start:stop].reshape(view),
-                                    bshape).ravel()
+        params[row] = np.broadcast_to(sweep.axes[j].codes[start:stop].reshape(view),
+                                      bshape).ravel()
     return params
 
 
@@ -63,12 +66,11 @@ def run_block(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
     """Selected outputs, status and profiles of one block, stacked as
     (n_scalar + 1 + n_profile * n_angle, *block_shape)."""
     bshape = tuple(stop - start for start, stop in location)
-    method = np.array(list(sweep.method.values()), dtype=np.float64)
-    out, status, prof = sweep.mechanism.run(block_parameters(sweep, location), method)
-    names = [o.name for o in sweep.mechanism.outputs]
-    rows = [names.index(name) for name in sweep.scalar_outputs]
-    pnames = [o.name for o in sweep.mechanism.profiles]
-    prows = [pnames.index(name) for name in sweep.profile_outputs]
+    out, status, prof = sweep.kernel(block_parameters(sweep, location), sweep.method_record)
+    index = sweep.mechanism.output_index
+    rows = [getattr(index, name) for name in sweep.scalar_outputs]
+    pindex = sweep.mechanism.profile_index
+    prows = [getattr(pindex, name) for name in sweep.profile_outputs]
     n_ang = prof.shape[2]
     result = np.empty((len(rows) + 1 + len(prows) * n_ang,) + bshape)
     result[:len(rows)] = out[rows].reshape((len(rows),) + bshape)
@@ -82,9 +84,8 @@ def run_block(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
 class Plan:
     """How a sweep is cut into blocks and where each kernel row goes in the atlas."""
 
-    def __init__(self, sweep: Sweep, chunk: int | None = None):
+    def __init__(self, sweep: Sweep):
         self.sweep = sweep
-        self.requested = chunk
         self.shape = sweep.shape
         self.angles = sweep.profile_coordinate()
         self.n_out = len(sweep.scalar_outputs)
@@ -92,15 +93,15 @@ class Plan:
         n_ang = self.angles.shape[0]
         # a block's memory grows with the profile length: keep it near the requested size
         per_point = self.n_out + 1 + self.n_prof * n_ang
-        target = max(1, (chunk or sweep.run.chunk) * (self.n_out + 1) // per_point)
-        if chunk is None and "chunk" not in sweep.run.model_fields_set:
+        target = max(1, sweep.run.chunk * (self.n_out + 1) // per_point)
+        if "chunk" not in sweep.run.model_fields_set:
             # at least MIN_BLOCKS blocks, so that a small grid of an expensive mechanism
             # (an integrated pendulum: ~1 ms a point) still keeps every core busy
             target = min(target, max(1, -(-math.prod(self.shape) // MIN_BLOCKS)))
         whole = tuple(d for d, axis in enumerate(sweep.axes)
-                      if axis.parameter.name in sweep.mechanism.whole_axes)
+                      if axis.name in sweep.mechanism.whole_axes)
         self.chunk_shape = choose_chunks(self.shape, target, whole)
-        self.chunks = da.core.normalize_chunks(self.chunk_shape, self.shape)
+        self.chunks = normalize_chunks(self.chunk_shape, self.shape)
         self.rows = per_point
 
     def locations(self):
@@ -115,8 +116,13 @@ class Plan:
         return math.prod(len(c) for c in self.chunks)
 
     def split(self, result: np.ndarray) -> dict[str, np.ndarray]:
-        """A stacked block result -> {variable: array over grid dims (+ profile dim last)}."""
-        out = {name: result[k] for k, name in enumerate(self.sweep.scalar_outputs)}
+        """A stacked block result -> {variable: array over grid dims (+ profile dim last)},
+        flag outputs as their int8 codes."""
+        mech = self.sweep.mechanism
+        out = {}
+        for k, name in enumerate(self.sweep.scalar_outputs):
+            o = mech.output(name)
+            out[name] = flag_codes(result[k], o) if o.is_flag else result[k]
         out["status"] = result[self.n_out].astype(np.int8)
         n_ang = self.angles.shape[0]
         for k, name in enumerate(self.sweep.profile_outputs):
@@ -125,25 +131,25 @@ class Plan:
         return out
 
 
-def kernel_array(plan: Plan) -> da.Array:
-    """All kernel rows of the sweep as one lazy dask array (rows, *grid)."""
-    sweep = plan.sweep
+def build(sweep: Sweep):
+    """The atlas as a lazy (dask-backed) xarray Dataset; nothing is computed here."""
+    import dask.array as da
+    import xarray as xr
 
-    def block(block_info=None):
-        return run_block(sweep, block_info[None]["array-location"][1:])
-
-    return da.map_blocks(block, chunks=((plan.rows,),) + plan.chunks, dtype=np.float64,
-                         meta=np.empty((0,) * (len(plan.shape) + 1)), name="kernel")
-
-
-def build(sweep: Sweep, chunk: int | None = None) -> xr.Dataset:
-    """The atlas as a lazy (dask-backed) Dataset; nothing is computed here."""
-    plan = Plan(sweep, chunk)
-    stacked = kernel_array(plan)
+    plan = Plan(sweep)
+    stacked = da.map_blocks(lambda block_info=None: run_block(
+        sweep, block_info[None]["array-location"][1:]), chunks=((plan.rows,),) + plan.chunks,
+        dtype=np.float64, meta=np.empty((0,) * (len(plan.shape) + 1)), name="kernel")
     n_out, n_ang = plan.n_out, plan.angles.shape[0]
     dims = [axis.name for axis in sweep.axes]
     coords = {axis.name: (axis.name, axis.values) for axis in sweep.axes}
-    data = {name: (dims, stacked[k]) for k, name in enumerate(sweep.scalar_outputs)}
+    data = {}
+    for k, name in enumerate(sweep.scalar_outputs):
+        o = sweep.mechanism.output(name)
+        rows = stacked[k]
+        if o.is_flag:
+            rows = rows.map_blocks(flag_codes, o, dtype=np.int8)
+        data[name] = (dims, rows)
     data["status"] = (dims, stacked[n_out].astype(np.int8))
     if plan.n_prof:
         pdim = sweep.mechanism.profile_dim.name

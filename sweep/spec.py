@@ -1,7 +1,9 @@
-"""Sweep specs (atlas.md §1): TOML in, a validated ``Sweep`` out, or a one-line UserError.
+"""Sweep specs: TOML in, a validated ``Sweep`` out, or a one-line UserError.
 
-Everything is checked here, before any compute: structure (pydantic), parameter names and
-domains (the registry), cross-parameter rules (the mechanism), outputs, method and run keys.
+Everything is checked here, before any compute, as a sequence of named checks (``validate``):
+the structure (pydantic), the mechanism, parameter names, grid axes and fixed values against
+their declared domains, method keys, where each quantity is used, the mechanism's own rules
+between parameters, the outputs, and the chart.
 """
 
 from __future__ import annotations
@@ -9,17 +11,17 @@ from __future__ import annotations
 import json
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Callable, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt, StrictStr
 from pydantic import ValidationError
 
+from kernels.declaration import Mechanism, Quantity, used_when_text
 from sweep import registry
 from sweep.errors import UserError
-from sweep.registry import Mechanism, Parameter
 
 MAX_POINTS = 10**10  # more than this is a typo, not a sweep
 MAX_AXIS = 10**8
@@ -66,7 +68,7 @@ class SpecModel(_Strict):
 class Axis:
     """One grid dimension: its labels (coordinate values) and the kernel codes."""
 
-    parameter: Parameter
+    parameter: Quantity
     values: np.ndarray  # float64, or str labels for a categorical parameter
     codes: np.ndarray  # float64 as the kernel reads them
 
@@ -77,15 +79,24 @@ class Axis:
 
 @dataclass
 class Sweep:
+    """A validated sweep: what the engine computes and the atlas records."""
+
     mechanism: Mechanism
+    kernel: Callable  # the kernel entry point run(params, method)
     axes: list[Axis]
     fixed: dict[str, float]  # kernel codes of the parameters not on the grid (NaN: not given)
-    outputs: list[str]
-    method: dict[str, float]
+    outputs: list[str]  # the atlas's output variables (scalars, then profiles)
+    method: dict[str, Any]  # method options as the user reads them (words, numbers)
+    method_record: Any  # the same options as the kernel reads them (by name)
     run: RunSettings
     chart: ChartSettings | None
     title: str
     spec: dict = field(default_factory=dict)  # the spec with defaults filled, JSON-able
+    source: dict = field(default_factory=dict)  # the document as given (+ run overrides)
+
+    def __reduce__(self):
+        # rebuilt from the document it came from (deterministic), e.g. on a cluster worker
+        return validate, (self.source,)
 
     @property
     def scalar_outputs(self) -> list[str]:
@@ -100,7 +111,7 @@ class Sweep:
     def profile_coordinate(self) -> np.ndarray:
         if not self.profile_outputs:
             return np.empty(0)
-        return self.mechanism.profile_coordinate(self.method)
+        return self.mechanism.profile_coordinate(self.method_record)
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -113,6 +124,126 @@ class Sweep:
     def spec_json(self) -> str:
         return json.dumps(self.spec, sort_keys=False)
 
+    def with_run(self, **changes) -> Sweep:
+        """The same sweep with run settings changed (command-line overrides), recorded in
+        the spec; a value of None leaves a setting as it is."""
+        changes = {k: v for k, v in changes.items() if v is not None}
+        if not changes:
+            return self
+        try:
+            run = RunSettings.model_validate(self.run.model_dump() | changes)
+        except ValidationError as err:
+            raise UserError("run." + _pydantic_message(err)) from None
+        run = RunSettings.model_construct(_fields_set=self.run.model_fields_set | set(changes),
+                                          **run.model_dump())
+        source = self.source | {"run": self.source.get("run", {}) | changes}
+        return replace(self, run=run, spec=self.spec | {"run": run.model_dump()},
+                       source=source)
+
+
+# ---------------------------------------------------------------- domains, in words
+
+def domain_text(q: Quantity) -> str:
+    """What values a quantity allows, in words: 'one of "a", "b"', 'a number > 0' ..."""
+    if q.choices is not None:
+        return "one of " + ", ".join(_literal(c) for c in q.choices)
+    kind = "a whole number" if q.integer else "a number"
+    lo, hi = q.minimum, q.maximum
+    if math.isinf(lo) and math.isinf(hi):
+        text = ("any finite non-zero number" if q.nonzero else "any finite number")
+        if q.integer:
+            text = text.replace("number", "whole number")
+    else:
+        if math.isinf(hi):
+            text = f"{kind} {'>=' if q.min_inclusive else '>'} {lo:g}"
+        elif math.isinf(lo):
+            text = f"{kind} {'<=' if q.max_inclusive else '<'} {hi:g}"
+        else:
+            text = (f"{kind} in {'[' if q.min_inclusive else '('}{lo:g}, {hi:g}"
+                    f"{']' if q.max_inclusive else ')'}")
+        if q.nonzero:
+            text += ", not 0"
+    if q.aliases:
+        text = " or ".join(_literal(a) for a in q.aliases) + " or " + text
+    return text
+
+
+def _literal(value) -> str:
+    return f'"{value}"' if isinstance(value, str) else repr(value)
+
+
+def check_value(q: Quantity, value) -> str | None:
+    """None if ``value`` is allowed for ``q``, else what is allowed."""
+    if q.choices is not None:
+        ok = any(value == c and type(value) is type(c) for c in q.choices)
+        return None if ok else domain_text(q)
+    if q.aliases and isinstance(value, str) and value in q.aliases:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return domain_text(q)
+    if q.integer and not isinstance(value, int):
+        return domain_text(q)
+    v = float(value)
+    if (not math.isfinite(v) or v < q.minimum or (v == q.minimum and not q.min_inclusive)
+            or v > q.maximum or (v == q.maximum and not q.max_inclusive)
+            or (q.nonzero and v == 0.0)):
+        return domain_text(q)
+    return None
+
+
+# ---------------------------------------------------------------- reading a spec
+
+def parse(text: str, source: str = "spec") -> Sweep:
+    """Parse and validate a TOML spec; raise UserError with a one-line message."""
+    text = text.removeprefix("\ufeff")  # a byte-order mark, as Windows editors write it
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise UserError(f"{source}: invalid TOML: {err}") from None
+    return validate(raw)
+
+
+def load(path: str | Path) -> Sweep:
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise UserError(f"spec: no such file: {path}") from None
+    except IsADirectoryError:
+        raise UserError(f"spec: {path} is a directory, not a spec file") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise UserError(f"spec: cannot read {path}: {err}") from None
+    return parse(text, source=str(path))
+
+
+def validate(raw: dict) -> Sweep:
+    """A spec document (as read from TOML) -> a Sweep, or a one-line UserError."""
+    model = _structure(raw)
+    kernel = _mechanism(model)
+    mech = kernel.declaration
+    _known_names(model, mech)
+    axes = _grid(model, mech)
+    fixed, fixed_echo = _fixed(model, mech)
+    method, record = _method(model, mech)
+    given = _given(model, axes, method)
+    _where_used(mech, given, method)
+    _mechanism_rules(mech, given)
+    outputs = _outputs(model, mech, axes, record)
+    _chart(model, mech, axes, outputs)
+    spec = {
+        "mechanism": mech.name,
+        "title": model.title or mech.title,
+        "outputs": outputs,
+        "grid": dict(model.grid),
+        "fixed": fixed_echo,
+        "method": method,
+        "run": model.run.model_dump(),
+    }
+    if model.chart is not None:
+        spec["chart"] = model.chart.model_dump()
+    return Sweep(mech, kernel.run, axes, fixed, outputs, method, record, model.run,
+                 model.chart, spec["title"], spec, raw)
+
 
 def _pydantic_message(err: ValidationError) -> str:
     e = err.errors()[0]
@@ -124,13 +255,61 @@ def _pydantic_message(err: ValidationError) -> str:
     return f"{loc}: {e['msg']}"
 
 
-def _axis_values(name: str, entry: Any, p: Parameter) -> tuple[np.ndarray, list]:
+def _structure(raw: dict) -> SpecModel:
+    """Keys, tables and their types."""
+    try:
+        return SpecModel.model_validate(raw)
+    except ValidationError as err:
+        raise UserError(_pydantic_message(err)) from None
+
+
+def _mechanism(model: SpecModel) -> registry.Kernel:
+    if model.mechanism not in registry.names():
+        raise UserError(f"mechanism: unknown mechanism {model.mechanism!r}; allowed: "
+                        + ", ".join(registry.names()))
+    return registry.get(model.mechanism)
+
+
+def _known_names(model: SpecModel, mech: Mechanism) -> None:
+    """Every grid and fixed name is a parameter, given once; every method key is known."""
+    known = [p.name for p in mech.parameters]
+    if not model.grid:
+        raise UserError("grid: at least one axis is required")
+    for table, entries in (("grid", model.grid), ("fixed", model.fixed)):
+        for name in entries:
+            if name not in known:
+                raise UserError(f"{table}.{name}: unknown parameter of {mech.name}; "
+                                f"allowed: {', '.join(known)}")
+    for name in model.fixed:
+        if name in model.grid:
+            raise UserError(f"{name}: given in both [grid] and [fixed]; give it once")
+    keys = [m.name for m in mech.method]
+    for name in model.method:
+        if name not in keys:
+            raise UserError(f"method.{name}: unknown method key of {mech.name}; "
+                            f"allowed: {', '.join(keys) or 'none'}")
+
+
+def _grid(model: SpecModel, mech: Mechanism) -> list[Axis]:
+    """The grid axes with their values and kernel codes; the grid's size."""
+    axes = []
+    for name, entry in model.grid.items():
+        p = mech.parameter(name)
+        labels, values = _axis_values(name, entry, p)
+        axes.append(Axis(p, labels, np.array([p.encode(v) for v in values])))
+    size = math.prod(len(a.values) for a in axes)
+    if size > MAX_POINTS:
+        raise UserError(f"grid: {size:.3g} points; at most {MAX_POINTS:.0e} are allowed")
+    return axes
+
+
+def _axis_values(name: str, entry: Any, p: Quantity) -> tuple[np.ndarray, list]:
     """Grid entry -> (labels array, python values) with domain checks."""
     where = f"grid.{name}"
     if isinstance(entry, dict):
         if p.choices is not None:
             raise UserError(f"{where}: a categorical parameter takes a list of "
-                            f"{p.domain_text()}")
+                            f"{domain_text(p)}")
         try:
             rng = RangeAxis.model_validate(entry)
         except ValidationError as err:
@@ -148,10 +327,12 @@ def _axis_values(name: str, entry: Any, p: Parameter) -> tuple[np.ndarray, list]
             values = np.geomspace(start, stop, rng.num)
         else:
             values = np.linspace(start, stop, rng.num)
-        for v in values:
-            if p.check(float(v)) is not None:
+        # a range is monotonic: its ends bound it, and only 0 can fall inside a hole
+        zero = values[values == 0.0][:1] if p.nonzero else values[:0]
+        for v in [values[0], values[-1], *zero]:
+            if check_value(p, int(v) if p.integer and float(v).is_integer() else float(v)):
                 raise UserError(f"{where}: value {v:g} is outside the domain; "
-                                f"allowed: {p.domain_text()}")
+                                f"allowed: {domain_text(p)}")
         return values, [float(v) for v in values]
     if isinstance(entry, list):
         if not entry:
@@ -159,7 +340,7 @@ def _axis_values(name: str, entry: Any, p: Parameter) -> tuple[np.ndarray, list]
         if len(entry) > MAX_AXIS:
             raise UserError(f"{where}: more than {MAX_AXIS} values")
         for v in entry:
-            problem = p.check(v)
+            problem = check_value(p, v)
             if problem is not None:
                 raise UserError(f"{where}: value {v!r} is not allowed; allowed: {problem}")
         if len({(type(v) is str, v) for v in entry}) != len(entry):
@@ -171,140 +352,110 @@ def _axis_values(name: str, entry: Any, p: Parameter) -> tuple[np.ndarray, list]
                     "of values")
 
 
-def parse(text: str, source: str = "spec") -> Sweep:
-    """Parse and validate a TOML spec; raise UserError with a one-line message."""
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise UserError(f"{source}: invalid TOML: {err}") from None
-    return validate(raw)
-
-
-def load(path: str | Path) -> Sweep:
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise UserError(f"spec: no such file: {path}") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise UserError(f"spec: cannot read {path}: {err}") from None
-    return parse(text, source=str(path))
-
-
-def validate(raw: dict) -> Sweep:
-    try:
-        model = SpecModel.model_validate(raw)
-    except ValidationError as err:
-        raise UserError(_pydantic_message(err)) from None
-    if model.mechanism not in registry.names():
-        raise UserError(f"mechanism: unknown mechanism {model.mechanism!r}; allowed: "
-                        + ", ".join(registry.names()))
-    mech = registry.get(model.mechanism)
-    known = [p.name for p in mech.parameters]
-
-    if not model.grid:
-        raise UserError("grid: at least one axis is required")
-    for table, entries in (("grid", model.grid), ("fixed", model.fixed)):
-        for name in entries:
-            if name not in known:
-                raise UserError(f"{table}.{name}: unknown parameter of {mech.name}; "
-                                f"allowed: {', '.join(known)}")
-    for name in model.fixed:
-        if name in model.grid:
-            raise UserError(f"{name}: given in both [grid] and [fixed]; give it once")
-
-    axes: list[Axis] = []
-    given: dict[str, set] = {}
-    grid_echo: dict[str, Any] = {}
-    for name, entry in model.grid.items():
-        p = mech.parameter(name)
-        labels, pyvalues = _axis_values(name, entry, p)
-        codes = np.array([p.encode(v) for v in pyvalues], dtype=np.float64)
-        axes.append(Axis(p, labels, codes))
-        given[name] = set(pyvalues)
-        grid_echo[name] = entry
-    size = math.prod(len(a.values) for a in axes)
-    if size > MAX_POINTS:
-        raise UserError(f"grid: {size:.3g} points; at most {MAX_POINTS:.0e} are allowed")
-
-    fixed: dict[str, float] = {}
-    fixed_echo: dict[str, Any] = {}
+def _fixed(model: SpecModel, mech: Mechanism) -> tuple[dict[str, float], dict[str, Any]]:
+    """Kernel codes of every parameter not on the grid (given, default or NaN = not given),
+    and the values as the atlas records them."""
+    codes, echo = {}, {}
     for p in mech.parameters:
         if p.name in model.grid:
             continue
         if p.name in model.fixed:
-            v = model.fixed[p.name]
-            problem = p.check(v)
+            value = model.fixed[p.name]
+            problem = check_value(p, value)
             if problem is not None:
-                raise UserError(f"fixed.{p.name}: value {v!r} is not allowed; "
+                raise UserError(f"fixed.{p.name}: value {value!r} is not allowed; "
                                 f"allowed: {problem}")
-            given[p.name] = {v}
-        elif p.default is not None:
-            v = p.default
         else:
-            fixed[p.name] = math.nan
-            continue
-        fixed[p.name] = p.encode(v)
-        fixed_echo[p.name] = v
-    method: dict[str, float] = {}
-    method_echo: dict[str, Any] = {}
-    for name in model.method:
-        if name not in mech.method:
-            allowed = ", ".join(mech.method) or "none"
-            raise UserError(f"method.{name}: unknown method key of {mech.name}; "
-                            f"allowed: {allowed}")
-    for name, p in mech.method.items():
-        v = model.method.get(name, p.default)
-        problem = p.check(v)
-        if problem is not None:
-            raise UserError(f"method.{name}: value {v!r} is not allowed; allowed: {problem}")
-        method[name] = p.encode(v)
-        method_echo[name] = v
-        if name in model.method:
-            given["method." + name] = {v}
-    if mech.check is not None:
-        mech.check(given)  # only what the user set; the rules know the defaults
-    profile_names = [o.name for o in mech.profiles]
-    profiling = bool(mech.profiles) and method.get("profile_points", 0) > 0
+            value = p.default
+        codes[p.name] = p.encode(value)
+        if value is not None:
+            echo[p.name] = value
+    return codes, echo
 
-    all_outputs = [o.name for o in mech.outputs] + profile_names
+
+def _method(model: SpecModel, mech: Mechanism) -> tuple[dict[str, Any], Any]:
+    """Method options (given or default) in words, and the kernel's record of them."""
+    words = {}
+    for m in mech.method:
+        value = model.method.get(m.name, m.default)
+        problem = check_value(m, value)
+        if problem is not None:
+            raise UserError(f"method.{m.name}: value {value!r} is not allowed; "
+                            f"allowed: {problem}")
+        words[m.name] = value
+    return words, mech.method_record(**words)
+
+
+def _given(model: SpecModel, axes: list[Axis], method: dict) -> dict[str, set]:
+    """What the user set: {parameter: its values}, {"method.KEY": {value}}."""
+    given = {axis.name: set(_python_values(axis)) for axis in axes}
+    for name, value in model.fixed.items():
+        given[name] = {value}
+    for name, value in model.method.items():
+        given["method." + name] = {value}
+    return given
+
+
+def _python_values(axis: Axis) -> list:
+    if axis.parameter.choices is not None:
+        return [axis.parameter.decode(c) for c in axis.codes]
+    return [float(v) for v in axis.values]
+
+
+def _where_used(mech: Mechanism, given: dict[str, set], method: dict) -> None:
+    """A quantity given where the declaration says it means nothing is an error."""
+    for q, key, prefix in ([(p, p.name, "") for p in mech.parameters]
+                           + [(m, "method." + m.name, "method.") for m in mech.method]):
+        if key not in given or not q.used_when:
+            continue
+        for other, values in q.used_when.items():
+            pool = mech.parameters if not prefix else mech.method
+            default = next(o.default for o in pool if o.name == other)
+            effective = given.get(prefix + other, {default})
+            if not effective & set(values):
+                raise UserError(f"{key}: used only with {used_when_text(q)}")
+
+
+def _mechanism_rules(mech: Mechanism, given: dict[str, set]) -> None:
+    if mech.rules is not None:
+        problem = mech.rules(given)
+        if problem:
+            raise UserError(problem)
+
+
+def _outputs(model: SpecModel, mech: Mechanism, axes: list[Axis], record) -> list[str]:
+    """The atlas's output variables: the ones asked for (default all scalars, and the
+    profiles when the method asks for them), without outputs that only echo a grid axis
+    (the axis's coordinate carries them)."""
+    scalars = [o.name for o in mech.outputs]
+    profiles = [o.name for o in mech.profiles]
+    profiling = bool(profiles) and len(mech.profile_coordinate(record)) > 0
+    on_grid = {axis.name for axis in axes}
+    echoes = {o.name for o in mech.outputs if o.echoes in on_grid}
     if model.outputs is None:
-        outputs = [o.name for o in mech.outputs] + (profile_names if profiling else [])
+        wanted = scalars + (profiles if profiling else [])
     else:
         if not model.outputs:
             raise UserError("outputs: empty list; omit the key for all outputs")
         for name in model.outputs:
-            if name not in all_outputs:
+            if name not in scalars + profiles:
                 raise UserError(f"outputs: unknown output {name!r} of {mech.name}; "
-                                f"allowed: {', '.join(all_outputs)}")
-        if len(set(model.outputs)) != len(model.outputs):
-            raise UserError("outputs: repeated names")
-        for name in model.outputs:
-            if name in profile_names and not profiling:
+                                f"allowed: {', '.join(scalars + profiles)}")
+            if name in profiles and not profiling:
                 raise UserError(f"outputs: {name} is a profile; set method.profile_points "
                                 "to a number of crank angles > 0")
-        outputs = list(model.outputs)
+        if len(set(model.outputs)) != len(model.outputs):
+            raise UserError("outputs: repeated names")
+        wanted = list(model.outputs)
+    return [name for name in wanted if name not in echoes]
 
-    if model.chart is not None:
-        names = set(model.grid) | set(outputs)
-        if mech.profile_dim is not None and profiling:
-            names.add(mech.profile_dim.name)
-        for axis in ("x", "y", "color"):
-            v = getattr(model.chart, axis)
-            if v not in names:
-                raise UserError(f"chart.{axis}: {v!r} is neither a grid axis nor an output "
-                                "of this sweep")
 
-    spec = {
-        "mechanism": mech.name,
-        "title": model.title or mech.title,
-        "outputs": outputs,
-        "grid": grid_echo,
-        "fixed": fixed_echo,
-        "method": method_echo,
-        "run": model.run.model_dump(),
-    }
-    if model.chart is not None:
-        spec["chart"] = model.chart.model_dump()
-    return Sweep(mech, axes, fixed, outputs, method, model.run, model.chart,
-                 spec["title"], spec)
+def _chart(model: SpecModel, mech: Mechanism, axes: list[Axis], outputs: list[str]) -> None:
+    if model.chart is None:
+        return
+    names = {axis.name for axis in axes} | set(outputs)
+    for axis in ("x", "y", "color"):
+        v = getattr(model.chart, axis)
+        if v not in names:
+            raise UserError(f"chart.{axis}: {v!r} is neither a grid axis nor an output "
+                            "of this sweep")

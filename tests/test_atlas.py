@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from sweep import atlas, engine, spec
+from sweep import engine, runner, spec, store
 from sweep.cli import main
 from sweep.errors import UserError
 from sweep.query import evaluate, select
@@ -25,7 +25,7 @@ omega1 = [30.0, -20.0]
 def write(tmp_path, name, chunk=None, workers=None, text=SPEC):
     s = spec.parse(text)
     path = tmp_path / name
-    atlas.run_sweep(s, path, chunk=chunk, progress=False, workers=workers, history="test")
+    runner.run_sweep(s, path, chunk=chunk, progress=False, workers=workers, history="test")
     return xr.open_dataset(path)
 
 
@@ -97,17 +97,17 @@ def test_failed_run_leaves_no_atlas_but_keeps_its_finished_blocks(tmp_path, monk
     monkeypatch.setattr(engine, "run_block", flaky)
     target = tmp_path / "a.nc"
     with pytest.raises(RuntimeError):
-        atlas.run_sweep(s, target, chunk=50, progress=False, workers=1)
+        runner.run_sweep(s, target, chunk=50, progress=False, workers=1)
     assert not target.exists() and not list(tmp_path.glob(".a.nc.tmp*"))
-    kept = list(atlas.partial_dir(target).glob("*.npy"))
+    kept = list(store.partial_dir(target).glob("*.npy"))
     assert len(kept) >= 4
     monkeypatch.setattr(engine, "run_block", real)
     calls.clear()
     monkeypatch.setattr(engine, "run_block", lambda sw, loc: (calls.append(loc), real(sw, loc))[1])
-    done = atlas.run_sweep(s, target, chunk=50, progress=False, workers=2, resume=True,
+    done = runner.run_sweep(s, target, chunk=50, progress=False, workers=2, resume=True,
                            history="test")
     assert done["reused"] == len(kept) and len(calls) == done["blocks"] - len(kept)
-    assert not atlas.partial_dir(target).exists()
+    assert not store.partial_dir(target).exists()
     ds = xr.open_dataset(target)
     for name in reference.data_vars:
         assert np.array_equal(ds[name].values, reference[name].values, equal_nan=True)
@@ -121,8 +121,8 @@ def interrupted_run(tmp_path, monkeypatch):
         patch.setattr(engine, "run_block",
                       lambda *a: (_ for _ in ()).throw(KeyboardInterrupt))
         with pytest.raises(KeyboardInterrupt):
-            atlas.run_sweep(s, target, chunk=50, progress=False, workers=1)
-    assert atlas.partial_dir(target).exists() and not target.exists()
+            runner.run_sweep(s, target, chunk=50, progress=False, workers=1)
+    assert store.partial_dir(target).exists() and not target.exists()
     return s, target
 
 
@@ -130,13 +130,13 @@ def test_resume_refuses_a_different_spec(tmp_path, monkeypatch):
     s, target = interrupted_run(tmp_path, monkeypatch)
     other = spec.parse(SPEC.replace("num = 13", "num = 14"))
     with pytest.raises(UserError, match="different spec"):
-        atlas.run_sweep(other, target, chunk=50, progress=False, resume=True)
+        runner.run_sweep(other, target, chunk=50, progress=False, resume=True)
     with pytest.raises(UserError, match="--resume"):
-        atlas.run_sweep(s, target, chunk=50, progress=False)  # neither resume nor force
+        runner.run_sweep(s, target, chunk=50, progress=False)  # neither resume nor force
 
 
 def test_in_memory_dataset_equals_the_written_atlas(tmp_path, reference):
-    lazy = engine.build(spec.parse(SPEC), chunk=300).compute()
+    lazy = engine.build(spec.parse(SPEC).with_run(chunk=300)).compute()
     for name in reference.data_vars:
         assert np.array_equal(lazy[name].values, reference[name].values, equal_nan=True)
 
@@ -204,9 +204,9 @@ def test_atlas_can_be_reopened_after_another_handle_closed(tmp_path):
 
 def test_resume_refuses_a_different_code_version(tmp_path, monkeypatch):
     s, target = interrupted_run(tmp_path, monkeypatch)
-    monkeypatch.setattr(atlas, "code_version", lambda: "9.9.9+git.other")
+    monkeypatch.setattr(store, "code_version", lambda: "9.9.9+git.other")
     with pytest.raises(UserError, match="different code version"):
-        atlas.run_sweep(s, target, chunk=50, progress=False, resume=True)
+        runner.run_sweep(s, target, chunk=50, progress=False, resume=True)
 
 
 def test_small_grids_get_several_blocks_and_time_scale_axes_stay_whole():

@@ -10,7 +10,10 @@ import zlib
 import numpy as np
 import pytest
 
+from tests.conftest import flag_words
 from benchmarks.auto_cases import MECH, OUT, cost, errors, points, run
+
+OK = MECH.status_codes.ok
 
 @pytest.mark.parametrize("model", ["paper", "rigid", "rotor"])
 @pytest.mark.parametrize("tol", [1e-4, 1e-7])
@@ -18,12 +21,12 @@ def test_auto_meets_the_requested_tolerance_at_random_points(model, tol):
     params = points(model, 12, seed=zlib.crc32(f"{model} {tol}".encode()))
     ref, ref_status = run(params, "dopri5", rtol=1e-13)
     out, status = run(params, "auto", tol=tol)
-    assert np.all(ref_status == 0) and np.all(status == 0)
+    assert np.all(ref_status == OK) and np.all(status == OK)
     assert np.all(out[OUT["regime"]] == ref[OUT["regime"]])
     assert np.max(errors(out, ref)) <= tol
     used = "closed_form" if model != "rotor" else "dopri5"
-    codes = MECH.outputs[OUT["method_used"]].flags
-    assert {codes[int(c)] for c in out[OUT["method_used"]]} == {used}
+    codes = MECH.output("method_used").flags
+    assert set(out[OUT["method_used"]]) == {codes[used]}
 
 
 @pytest.fixture(scope="module")
@@ -41,17 +44,17 @@ def test_auto_costs_at_most_20_percent_more_than_the_best_single_method(rotor_sw
     sweep, found in hindsight on this very sweep; auto sets rtol from tol alone."""
     params, ref = rotor_sweep
     out, status = run(params, "auto", tol=tol)
-    assert np.all(status == 0) and np.max(errors(out, ref)) <= tol
+    assert np.all(status == OK) and np.max(errors(out, ref)) <= tol
     best = math.inf
     for atol_per_rtol in (1.0, 1e-2):
         for rtol in tol * np.geomspace(1.0, 1e-3, 13):
             trial, status = run(params, "dopri5", rtol=rtol, atol_per_rtol=atol_per_rtol)
-            if np.all(status == 0) and np.max(errors(trial, ref)) <= tol:
+            if np.all(status == OK) and np.max(errors(trial, ref)) <= tol:
                 best = min(best, cost(trial, "dopri5"))
                 break
     for dt in 0.4 / 2.0 ** np.arange(10):
         trial, status = run(params, "rk4", dt=dt)
-        if np.all(status == 0) and np.max(errors(trial, ref)) <= tol:
+        if np.all(status == OK) and np.max(errors(trial, ref)) <= tol:
             best = min(best, cost(trial, "rk4"))
             break
     assert cost(out, "dopri5") <= 1.2 * best
@@ -60,13 +63,12 @@ def test_auto_costs_at_most_20_percent_more_than_the_best_single_method(rotor_sw
 def test_auto_picks_the_closed_form_where_it_exists_and_records_it(tmp_path):
     import xarray as xr
 
-    from sweep import atlas, spec
+    from sweep import runner, spec
     s = spec.parse('mechanism = "rotary_pendulum"\n[grid]\nmodel = ["paper", "rotor"]\n'
                    'k = [1.0]\n[fixed]\nkappa = 1.2\n[method]\ntol = 1e-6')
-    atlas.run_sweep(s, tmp_path / "auto.nc", progress=False, history="test")
+    runner.run_sweep(s, tmp_path / "auto.nc", progress=False, history="test")
     ds = xr.open_dataset(tmp_path / "auto.nc")
-    meanings = ds["method_used"].attrs["flag_meanings"].split()
-    used = [meanings[int(v)] for v in ds["method_used"].values.ravel()]
+    used = list(flag_words(ds["method_used"]).ravel())
     assert used == ["closed_form", "dopri5"]
     assert '"tol": 1e-06' in ds.attrs["method"]
 
@@ -90,23 +92,22 @@ def balancer_sweep():
     while len(cases) < 60:
         a, b, g0 = coefs[rng.integers(len(coefs))]
         f, r, eta = rng.uniform(0.3, 2.0), rng.uniform(0.2, 1.5), rng.uniform(0.02, 0.2)
-        out = np.empty(len(bl.OUTPUTS))
+        out = np.empty(len(bl.O))
         if bl.response(a, b, g0, f, r, eta, bl.NEUTRAL_HALF_SWING, 1e-14, 1e-9, 4096,
-                       out) == 0:
+                       out) == bl.S.ok:
             cases.append((a, b, g0, f, r, eta, out.copy()))
     return cases
 
 
 def balancer_errors_and_cost(cases, tol, forced):
     from kernels import balancer as bl
-    names = list(bl.OUTPUTS)
     worst, harmonics = 0.0, 0
     for a, b, g0, f, r, eta, ref in cases:
-        out = np.empty(len(bl.OUTPUTS))
+        out = np.empty(len(bl.O))
         bl.response(a, b, g0, f, r, eta, bl.NEUTRAL_HALF_SWING, tol, 1e-9, forced, out)
-        worst = max(worst, max(abs(out[names.index(m)] / ref[names.index(m)] - 1)
+        worst = max(worst, max(abs(out[getattr(bl.O, m)] / ref[getattr(bl.O, m)] - 1)
                                for m in BALANCER_METRICS))
-        harmonics += int(out[names.index("harmonics_used")])
+        harmonics += int(out[bl.O.harmonics_used])
     return worst, harmonics
 
 

@@ -15,9 +15,9 @@ HALF, MEAN = bl.NEUTRAL_HALF_SWING, bl.NEUTRAL_MEAN
 
 
 def point(f, r, eta, neutral=HALF, forced=0, tol=1e-10, res_tol=1e-9, a=A, b=B, gamma0=GAMMA0):
-    out = np.empty(len(bl.OUTPUTS))
+    out = np.empty(len(bl.O))
     status = bl.response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out)
-    return dict(zip(bl.OUTPUTS, out)), status
+    return dict(zip(bl.O._fields, out)), status
 
 
 def series(theta, a, b, order=0):
@@ -200,20 +200,20 @@ def test_H7_rk4_blows_up_below_its_stability_limit():
 
 def test_H8_exact_resonance_is_flagged_not_nan_or_inf():
     out, status = point(1.0, 0.5, 0.0)  # no device: D_2 = 1/r^2 - 4 = 0
-    assert status == 10  # resonance
+    assert status == bl.S.resonance
     assert out["resonance_margin"] == 0.0 and np.isfinite(out["swing"])
     assert math.isnan(out["balancing_coefficient"])
     out, status = point(1.0, 0.5, 0.02)  # a little damping: a finite, large answer
-    assert status == 0 and out["dynamic_coefficient_free"] > 10
+    assert status == bl.S.ok and out["dynamic_coefficient_free"] > 10
 
 
 def test_H10_near_toggle_geometry_needs_many_harmonics_and_truncation_is_reported():
     geom = (3.0, 1.0, 3.0, 1.05)  # transmission angle 14 degrees
     a, b, g0 = bl.fourier_coefficients(*geom, 1.0)
     out, status = point(1.0, 0.8, 0.02, a=a, b=b, gamma0=g0)
-    assert status == 0 and out["harmonics_used"] > 80 and out["truncation_error"] <= 1e-10
+    assert status == bl.S.ok and out["harmonics_used"] > 80 and out["truncation_error"] <= 1e-10
     short, status = point(1.0, 0.8, 0.02, a=a, b=b, gamma0=g0, forced=20)
-    assert status == 11 and short["truncation_error"] > 1e-10  # truncation
+    assert status == bl.S.truncation and short["truncation_error"] > 1e-10  # truncation
     assert short["dynamic_coefficient_free"] != pytest.approx(out["dynamic_coefficient_free"],
                                                               rel=1e-6)
 

@@ -294,13 +294,9 @@ def test_transmission_angles_match_sampled_loop_closure():
 
 
 def test_kernel_writes_status_for_every_point_of_a_block():
-    from kernels import crank_rocker as cr
-    params = np.full((len(cr.PARAMETERS), 3), np.nan)
-    params[cr.P_TYPE] = [0, 1, 3]
-    params[cr.P_R] = 0.3
-    params[cr.P_L] = [2.5, 4.0, np.nan]
-    params[cr.P_ROOT] = 0
-    params[cr.P_L1], params[cr.P_W], params[cr.P_SIGMA] = 0.1, 30.0, 0.0
-    params[cr.P_LAM0, 2], params[cr.P_LAM2, 2], params[cr.P_LAM3, 2] = 1.0, 2.0, 2.0
-    out, status, _ = cr.crank_rocker_run(params, np.array([1e-9]))
-    assert list(status) == [0, 2, 13]
+    from tests.conftest import kernel_points
+    nan = math.nan
+    out, status, _ = kernel_points("crank_rocker", type=["a", "b", "general"],
+                                   largest_link=[2.5, 4.0, nan], lambda0=[nan, nan, 1.0],
+                                   lambda2=[nan, nan, 2.0], lambda3=[nan, nan, 2.0])
+    assert status == ["ok", "no_real_synthesis", "degenerate"]

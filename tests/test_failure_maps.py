@@ -9,6 +9,9 @@ import pytest
 
 from benchmarks import failure_maps as fm
 from kernels import pendulum as pd
+from kernels import rotary_pendulum as kr
+
+ST = kr.S  # status codes
 
 PHASES = np.arange(16) / 16
 
@@ -63,10 +66,10 @@ def test_rk4_alone_classifies_escape_right_only_above_step4(step):
 def test_the_kernel_classifies_by_the_closed_form_where_the_integrator_cannot(delta):
     """The same launch, 2 = v_crit (1 -+ delta) with kappa = (1 +- delta)^-2, k = 1, R = 0,
     through the kernel with DOPRI5 at a loose rtol: the closed-form criterion decides."""
-    out = np.empty(11)
+    out = np.empty(pd.N_ROW)
     returns = pd.dimensionless(pd.MODEL_RIGID, 1.0, 4.0, (1 + delta) ** 2, 0.0,
                                pd.INTEGRATOR_DOPRI5, 1e-4, 1e-6, 0.0, 10, out)
-    assert returns == 0 and out[0] == pd.REGIME_PERIOD_1
+    assert returns == ST.ok and out[pd.ROW_REGIME] == pd.REGIME_PERIOD_1
     escapes = pd.dimensionless(pd.MODEL_RIGID, 1.0, 4.0, (1 - delta) ** 2, 0.0,
                                pd.INTEGRATOR_DOPRI5, 1e-4, 1e-6, 0.0, 10, out)
-    assert escapes == 5 and out[0] == pd.REGIME_ESCAPE
+    assert escapes == ST.escape and out[pd.ROW_REGIME] == pd.REGIME_ESCAPE

@@ -7,6 +7,7 @@ import pytest
 
 from kernels import fourbar as fb
 from kernels import kinetostatics as kt
+from kernels.declaration import SIGMA_IMPACT
 
 L1 = 0.1
 LAM0, LAM3 = 2.029159519725557, 1.470840480274443  # T1 lambda2 = 2.5 (type a, R = 0.3)
@@ -24,9 +25,9 @@ MOVING = dict(LOADED, base_motion=kt.BASE_ROTATING, base_omega=1.3, base_epsilon
 
 
 def params(**kw):
-    pr = np.zeros(len(kt.PARAMETERS))
+    pr = np.zeros(len(kt.P))
     for k, v in kw.items():
-        pr[kt.PARAMETERS.index(k)] = v
+        pr[getattr(kt.P, k)] = v
     return pr
 
 
@@ -35,7 +36,7 @@ SNAP = 1e-9  # the kernel's geometry_tol: a classified change point is an exact 
 
 def forces(phi1, pr):
     res = np.empty(kt.N_RESULT)
-    assert kt.joint_forces(phi1, pr, pr[kt.PARAMETERS.index("sigma")], res, SNAP)
+    assert kt.joint_forces(phi1, pr, pr[kt.P.sigma], res, SNAP)
     return res
 
 
@@ -43,7 +44,7 @@ class Mech:
     """Independent kinematics and loads in numpy for the checks (links as complex numbers)."""
 
     def __init__(self, pr):
-        self.p = dict(zip(kt.PARAMETERS, pr))
+        self.p = dict(zip(kt.P._fields, pr))
 
     def state(self, phi1):
         p = self.p
@@ -71,7 +72,7 @@ class Mech:
                          (1j * e[2] - w[2]**2) * rho[2]])
         wb = p["base_omega"] if p["base_motion"] == kt.BASE_ROTATING else 0.0
         eb = p["base_epsilon"] if p["base_motion"] == kt.BASE_ROTATING else 0.0
-        r_o = (p["crank_pivot_x"] + 1j * p["crank_pivot_y"]) * (p["base_motion"] == 1) + S
+        r_o = (p["crank_pivot_x"] + 1j * p["crank_pivot_y"]) * (p["base_motion"] == kt.BASE_ROTATING) + S
         a = arel + 2 * wb * 1j * vrel + eb * 1j * r_o - wb**2 * r_o
         eps_abs = e + eb
         g = -p["g"] * (math.sin(p["tilt"]) + 1j * math.cos(p["tilt"]))
@@ -151,7 +152,7 @@ def test_O14_power_balance_and_O15_virtual_work(case):
         wb = s["wb"]
         # absolute velocities in base-frame components: v_rel + Omega_b k x r
         v_abs = s["vrel"] + wb * 1j * s["r_o"]
-        r_oa = (p["crank_pivot_x"] + 1j * p["crank_pivot_y"]) * (p["base_motion"] == 1)
+        r_oa = (p["crank_pivot_x"] + 1j * p["crank_pivot_y"]) * (p["base_motion"] == kt.BASE_ROTATING)
         v_a = wb * 1j * r_oa
         v_d = wb * 1j * (r_oa + p["l0"])
         v_p = s["dS"][2] * 0 + s["u"][2] * p["omega1"] * 1j * (s["P"] - p["l0"]) \
@@ -195,8 +196,7 @@ def run_point(case, **method):
     m = dict(geometry_tol=1e-9, special_window=0.01, quadrature_points=200, peak_samples=1441,
              profile_points=0)
     m.update(method)
-    return kt.linkage_forces_run(params(**case).reshape(-1, 1),
-                                 np.array([m[k] for k in kt.METHOD]))
+    return kt.run(params(**case).reshape(-1, 1), kt.DECLARATION.method_record(**m))
 
 
 def test_O17_cycle_work_equals_kinetic_energy_lost_at_impact():
@@ -205,7 +205,7 @@ def test_O17_cycle_work_equals_kinetic_energy_lost_at_impact():
     # one-sided limits of T at the node by Richardson on h = 1e-6, 2e-6
     t_after = 2 * energy(mech, 1e-6)[0] - energy(mech, 2e-6)[0]
     t_before = 2 * energy(mech, -1e-6)[0] - energy(mech, -2e-6)[0]
-    work = out[kt.OUTPUTS.index("cycle_work"), 0]
+    work = out[kt.O.cycle_work, 0]
     assert work == pytest.approx(t_before - t_after, rel=1e-6)  # O17 asks 1e-5; we get 1e-8
     assert work == pytest.approx(464.318298, rel=1e-6)  # linkages.md §5.5
 
@@ -214,9 +214,8 @@ def test_O17_smooth_crank_rocker_does_no_net_work():
     # a generic crank-rocker without special position: integral of M_b over the period is 0
     case = dict(BASE, l0=0.3, l1=0.1, l2=0.36, l3=0.22, sigma=1.0)
     out, status, _ = run_point(case)
-    assert status[0] == 0
-    assert abs(out[kt.OUTPUTS.index("cycle_work"), 0]) < 1e-9 * out[
-        kt.OUTPUTS.index("balancing_moment_rms"), 0] * 2 * math.pi
+    assert status[0] == kt.S.ok
+    assert abs(out[kt.O.cycle_work, 0]) < 1e-9 * out[kt.O.balancing_moment_rms, 0] * 2 * math.pi
 
 
 def test_O18_statics():
@@ -259,8 +258,8 @@ def test_H13_steep_balancing_moment_before_the_node():
 def test_peaks_are_windowed_and_flagged_at_a_special_position():
     wide, s_wide, _ = run_point(BASE, special_window=0.05)
     narrow, s_narrow, _ = run_point(BASE, special_window=0.0005)
-    b = kt.OUTPUTS.index("force_peak_B")
-    assert s_wide[0] == s_narrow[0] == 4  # special_position
+    b = kt.O.force_peak_B
+    assert s_wide[0] == s_narrow[0] == kt.S.special_position
     assert narrow[b, 0] > 3 * wide[b, 0]  # the spike: peaks depend on the window, as documented
 
 
@@ -270,16 +269,18 @@ def test_profiles_show_the_spike_and_match_point_values():
     pr = params(**BASE)
     for j in (0, 100, 359, 719):
         r = forces(angles[j], pr)
-        assert prof[0, 0, j] == r[kt.R_F21N] and prof[8, 0, j] == r[kt.R_MB]
-    f21n = np.abs(prof[0, 0])
+        assert prof[kt.F.F21_n, 0, j] == r[kt.R_F21N]
+        assert prof[kt.F.balancing_moment, 0, j] == r[kt.R_MB]
+    f21n = np.abs(prof[kt.F.F21_n, 0])
     assert f21n[0] > 10 * np.median(f21n)  # next to the node at 0
 
 
 def test_bad_points_get_status_not_exceptions():
     short = dict(BASE, l2=0.05)  # cannot close
-    assert run_point(short)[1][0] == 1
-    free = dict(BASE, l0=0.3, l1=0.1, l2=0.36, l3=0.22, sigma=kt.SIGMA_IMPACT)
-    assert run_point(free)[1][0] == 16  # no special position: "impact" branch undefined
+    assert run_point(short)[1][0] == kt.S.not_assemblable
+    free = dict(BASE, l0=0.3, l1=0.1, l2=0.36, l3=0.22, sigma=SIGMA_IMPACT)
+    # no special position: the "impact" branch is undefined
+    assert run_point(free)[1][0] == kt.S.no_special_position
 
 
 SMOOTH = dict(BASE, l0=0.3, l1=0.1, l2=0.36, l3=0.22, sigma=1.0)  # no special position

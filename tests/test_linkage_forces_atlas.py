@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from sweep import atlas, spec
+from sweep import runner, spec
 from sweep.cli import main
 from sweep.errors import UserError
 
@@ -23,7 +23,7 @@ peak_samples = 181
 
 def write(tmp_path, name, chunk=None, workers=None, text=SPEC):
     s = spec.parse(text)
-    atlas.run_sweep(s, tmp_path / name, chunk=chunk, progress=False, workers=workers,
+    runner.run_sweep(s, tmp_path / name, chunk=chunk, progress=False, workers=workers,
                        history="test")
     return xr.open_dataset(tmp_path / name)
 

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from sweep import atlas, spec
+from sweep import runner, spec
+from sweep.store import partial_dir
 
 SLOW = '''
 mechanism = "linkage_forces"
@@ -27,7 +28,7 @@ peak_samples = 1441
 
 def reference_atlas(tmp_path, text, chunk):
     path = tmp_path / "reference.nc"
-    atlas.run_sweep(spec.parse(text), path, chunk=chunk, progress=False, workers=2,
+    runner.run_sweep(spec.parse(text), path, chunk=chunk, progress=False, workers=2,
                     history="reference")
     return xr.open_dataset(path)
 
@@ -41,7 +42,7 @@ def test_sigkill_then_resume_gives_the_same_atlas_and_reuses_finished_blocks(tmp
     spec_file = tmp_path / "slow.toml"
     spec_file.write_text(SLOW)
     target = tmp_path / "slow.nc"
-    store = atlas.partial_dir(target)
+    store = partial_dir(target)
     cmd = [sys.executable, "-m", "sweep", "run", str(spec_file), "-o", str(target), "-q",
            "--chunk", "100", "--workers", "1"]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
@@ -65,7 +66,7 @@ def test_sigkill_then_resume_gives_the_same_atlas_and_reuses_finished_blocks(tmp
     # a spec change is refused: rerun, kill, resume with another spec
     proc = subprocess.Popen([c if c != str(target) else str(tmp_path / "b.nc") for c in cmd],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    store_b = atlas.partial_dir(tmp_path / "b.nc")
+    store_b = partial_dir(tmp_path / "b.nc")
     while time.time() < deadline and proc.poll() is None and not list(store_b.glob("*.npy")):
         time.sleep(0.05)
     proc.send_signal(signal.SIGKILL)
@@ -83,9 +84,9 @@ def test_resumed_blocks_are_not_recomputed(tmp_path):
 
     s = spec.parse(SLOW.replace("num = 100", "num = 10"))
     target = tmp_path / "r.nc"
-    atlas.run_sweep(s, target, chunk=100, progress=False, workers=1)
-    total = len(list(engine.Plan(s, 100).locations()))
-    store = atlas.partial_dir(target)
+    runner.run_sweep(s, target, chunk=100, progress=False, workers=1)
+    total = len(list(engine.Plan(s.with_run(chunk=100)).locations()))
+    store = partial_dir(target)
     # recreate an interrupted state from the finished atlas' blocks: run again, stop early
     calls = []
     real = engine.run_block
@@ -99,13 +100,13 @@ def test_resumed_blocks_are_not_recomputed(tmp_path):
     engine.run_block = stop_after_three
     try:
         with pytest.raises(KeyboardInterrupt):
-            atlas.run_sweep(s, tmp_path / "r2.nc", chunk=100, progress=False, workers=2)
-        stored = len(list(atlas.partial_dir(tmp_path / "r2.nc").glob("*.npy")))
+            runner.run_sweep(s, tmp_path / "r2.nc", chunk=100, progress=False, workers=2)
+        stored = len(list(partial_dir(tmp_path / "r2.nc").glob("*.npy")))
         assert stored == 3  # every block that finished was kept, though another failed
         calls.clear()
         engine.run_block = lambda sweep, location: (calls.append(location),
                                                      real(sweep, location))[1]
-        result = atlas.run_sweep(s, tmp_path / "r2.nc", chunk=100, progress=False, workers=1,
+        result = runner.run_sweep(s, tmp_path / "r2.nc", chunk=100, progress=False, workers=1,
                                  resume=True)
     finally:
         engine.run_block = real
@@ -124,7 +125,7 @@ def test_distributed_cluster_with_a_worker_killed_gives_the_same_atlas(tmp_path)
         with distributed.Client(cluster) as client:
             pids = list(client.run(os.getpid).values())
         target = tmp_path / "cluster.nc"
-        store = atlas.partial_dir(target)
+        store = partial_dir(target)
         killed = []
 
         def kill_one_worker():
@@ -138,7 +139,7 @@ def test_distributed_cluster_with_a_worker_killed_gives_the_same_atlas(tmp_path)
 
         killer = threading.Thread(target=kill_one_worker)
         killer.start()
-        atlas.run_sweep(spec.parse(text), target, chunk=60, progress=False,
+        runner.run_sweep(spec.parse(text), target, chunk=60, progress=False,
                         scheduler=cluster.scheduler_address, history="cluster")
         killer.join()
     assert killed, "no worker was killed: the run was too fast to test the retry"

@@ -12,8 +12,10 @@ from kernels import pendulum_rotor as pr
 from kernels import rotary_pendulum as kr
 from sweep import spec
 from sweep.errors import UserError
+from tests.conftest import flag_words
 
 XI = 4.0
+ST = kr.S  # status codes
 # dynamics.md §1.6: the model values (A, n, max|psi''|/omega1^2) and the paper's Table 1
 MODEL = {1.0: (2.15268, 0.69967, 1.2734), 1.5: (1.91174, 1.00691, 2.2122),
          2.0: (1.79862, 1.25931, 3.4131), 2.5: (1.72373, 1.48959, 4.9196)}
@@ -83,13 +85,13 @@ def test_P_O7_escape_threshold_classifies_exactly(k, r_crit, integrator):
     v_crit = pd.paper_critical_speed(k, XI)
     exact = (v_crit - (1 + k)) / (v_crit + (1 + k))
     assert exact == pytest.approx(r_crit, abs=6e-4)
-    out = np.empty(11)
+    out = np.empty(pd.N_ROW)
     below = pd.dimensionless(0, k, XI, 0.8, exact * (1 - 1e-6), integrator, 1e-10, 1e-12,
                              0.0, 100000, out)
-    assert below == 0 and out[0] == pd.REGIME_PERIOD_1
+    assert below == ST.ok and out[pd.ROW_REGIME] == pd.REGIME_PERIOD_1
     above = pd.dimensionless(0, k, XI, 0.8, exact * (1 + 1e-6), integrator, 1e-10, 1e-12,
                              0.0, 100000, out)
-    assert above == 5 and out[0] == pd.REGIME_ESCAPE  # status escape
+    assert above == ST.escape and out[pd.ROW_REGIME] == pd.REGIME_ESCAPE  # status escape
 
 
 def test_P_O8_rigid_pendulum_elliptic_period_and_the_separatrix():
@@ -104,17 +106,17 @@ def test_P_O8_rigid_pendulum_elliptic_period_and_the_separatrix():
     # H1: on the separatrix (point mass, k = 1, R = 0: v^2 = 4 kappa k) the closed form
     # decides "no return" before any integration
     assert math.isnan(pd.rigid_flight(2.0, 1.0)[0])
-    out = np.empty(11)
+    out = np.empty(pd.N_ROW)
     assert pd.dimensionless(1, 1.0, XI, 1.0, 0.0, pd.INTEGRATOR_DOPRI5, 1e-10, 1e-12, 0.0,
-                            100, out) == 5 and out[8] == 0  # escape, no step taken
+                            100, out) == ST.escape and out[pd.ROW_STEPS] == 0  # escape, no step taken
 
 
 def test_physical_pendulum_never_returns_after_a_plastic_impact():
     """dynamics.md §0 finding 2: kappa = xi/(1+xi) < (1+k)^2/(4k) for every k."""
-    out = np.empty(11)
+    out = np.empty(pd.N_ROW)
     for k in (1.0, 1.5, 2.0, 2.5):
-        assert pd.dimensionless(1, k, XI, XI / (1 + XI), 0.0, 0, 0, 0, 0, 1, out) == 5
-        assert math.isnan(out[7])  # no R has a periodic regime
+        assert pd.dimensionless(1, k, XI, XI / (1 + XI), 0.0, 0, 0, 0, 0, 1, out) == ST.escape
+        assert math.isnan(out[pd.ROW_RCRIT])  # no R has a periodic regime
 
 
 def test_H2_near_separatrix_slowing():
@@ -154,14 +156,15 @@ def test_rk4_order_measured_not_assumed():
 
 def test_integrators_agree_with_the_closed_form_at_random_points():
     rng = np.random.default_rng(5)
-    out_c, out_d = np.empty(11), np.empty(11)
+    out_c, out_d = np.empty(pd.N_ROW), np.empty(pd.N_ROW)
     for _ in range(15):
         k = rng.uniform(1.0, 3.0)
         v_crit = pd.paper_critical_speed(k, XI)
         r = rng.uniform(0, 0.9) * (v_crit - 1 - k) / (v_crit + 1 + k)
-        assert pd.dimensionless(0, k, XI, 0.8, r, 1, 0, 0, 0, 1000, out_c) == 0
-        assert pd.dimensionless(0, k, XI, 0.8, r, 3, 1e-10, 1e-12, 0, 1000, out_d) == 0
-        for j in (1, 2, 3, 4, 6):  # amplitude, n, tau1, v*, peak acceleration
+        assert pd.dimensionless(0, k, XI, 0.8, r, 1, 0, 0, 0, 1000, out_c) == ST.ok
+        assert pd.dimensionless(0, k, XI, 0.8, r, 3, 1e-10, 1e-12, 0, 1000, out_d) == ST.ok
+        for j in (pd.ROW_AMPLITUDE, pd.ROW_FREQUENCY, pd.ROW_INTERVAL, pd.ROW_SPEED,
+                  pd.ROW_ACCEL):
             assert out_d[j] == pytest.approx(out_c[j], rel=1e-7)
 
 
@@ -279,13 +282,12 @@ def test_H3_grazing_contact_is_found_where_scipy_steps_over_it(eps):
 def test_regime_flags_decode_by_name_in_the_atlas(tmp_path):
     import xarray as xr
 
-    from sweep import atlas
+    from sweep import runner
 
     s = spec.parse('mechanism = "rotary_pendulum"\n[grid]\nR = [0.0, 0.35]\n[fixed]\nk = 2.5')
-    atlas.run_sweep(s, tmp_path / "p.nc", progress=False, history="test")
+    runner.run_sweep(s, tmp_path / "p.nc", progress=False, history="test")
     ds = xr.open_dataset(tmp_path / "p.nc")
-    meanings = ds["regime"].attrs["flag_meanings"].split()
-    decoded = [meanings[int(v)] for v in ds["regime"].values]
+    decoded = list(flag_words(ds["regime"]))
     assert decoded == ["period_1", "escape"]  # R = 0.35 > R_crit(2.5) = 0.288
     status = ds["status"].attrs["flag_meanings"].split()
     codes = list(ds["status"].attrs["flag_values"])
@@ -340,7 +342,7 @@ def test_rotor_model_tends_to_the_rigid_model_with_a_stiff_motor():
     for slope in (1e2, 1e4, 1e6):
         w, psi, dpsi = pr.rotor_integrate_to(1.0, 0.0, -3.0, 1.5, k, xi, 20.0, slope, 1.0,
                                              min(1e-4, 0.5 / slope))
-        gaps.append(abs(psi - rigid[0]))
+        gaps.append(abs(psi - rigid[pd.ROW_REGIME]))
     assert gaps[0] > gaps[1] > gaps[2] and gaps[2] < 1e-3
 
 

@@ -14,6 +14,7 @@ from kernels import pendulum_lab as pl
 from kernels import rotary_pendulum as kr
 
 XI = 4.0
+ST = kr.S  # status codes
 REG = {name: code for code, name in enumerate(pd.REGIMES)}
 TIGHT = dict(method="DOP853", rtol=1e-12, atol=1e-12)
 
@@ -83,21 +84,21 @@ def test_rotor_steady_state_matches_scipy(j1, slope, r):
     """A light rotor on a soft motor: the rotor speed drops at every impact and recovers."""
     k, kappa = 1.0, 1.2  # contact outboard of the centre of percussion: the pendulum returns
     code, row = steady(case(model=kr.MODEL_ROTOR, k=k, kappa=kappa, r=r, j1=j1, slope=slope))
-    assert code == 0 and row[0] == REG["period_1"]
+    assert code == ST.ok and row[pd.ROW_REGIME] == REG["period_1"]
     amp, tau, angle, w, v = rotor_reference(k, XI, kappa, r, j1, slope, 1.0, 60)
-    assert row[1] == pytest.approx(amp, rel=1e-8)
-    assert row[2] == pytest.approx(math.pi / tau, rel=1e-8)
-    assert row[3] == pytest.approx(angle, rel=1e-8)
-    assert row[4] == pytest.approx((1 + k) * w + v, rel=1e-8)
-    assert row[11] == pytest.approx(angle / tau, rel=1e-8)
-    assert row[11] < 0.7  # the motor sags: far from the constant-speed models
+    assert row[pd.ROW_AMPLITUDE] == pytest.approx(amp, rel=1e-8)
+    assert row[pd.ROW_FREQUENCY] == pytest.approx(math.pi / tau, rel=1e-8)
+    assert row[pd.ROW_INTERVAL] == pytest.approx(angle, rel=1e-8)
+    assert row[pd.ROW_SPEED] == pytest.approx((1 + k) * w + v, rel=1e-8)
+    assert row[pd.ROW_ROTOR_SPEED] == pytest.approx(angle / tau, rel=1e-8)
+    assert row[pd.ROW_ROTOR_SPEED] < 0.7  # the motor sags: far from the constant-speed models
 
 
 def test_a_rotor_thrown_back_by_the_impact_is_flagged_degenerate():
     """A light rotor hit outboard of the centre of percussion reverses: the pendulum does not
     leave the stop, and the rotor-stop idealisation does not apply."""
     code, row = steady(case(model=kr.MODEL_ROTOR, k=1.0, kappa=1.2, j1=5.0, slope=2.0))
-    assert code == 13 and np.isnan(row[1])
+    assert code == ST.degenerate and np.isnan(row[pd.ROW_AMPLITUDE])
 
 
 def test_rotor_model_tends_to_the_rigid_model_as_inertia_and_motor_grow():
@@ -106,8 +107,9 @@ def test_rotor_model_tends_to_the_rigid_model_as_inertia_and_motor_grow():
     gaps = []
     for size in (1e2, 1e4, 1e6):
         code, row = steady(case(model=kr.MODEL_ROTOR, k=k, kappa=kappa, j1=size, slope=size))
-        assert code == 0
-        gaps.append(max(abs(row[j] - rigid[j]) / abs(rigid[j]) for j in (1, 2, 3, 4)))
+        assert code == ST.ok
+        gaps.append(max(abs(row[j] - rigid[j]) / abs(rigid[j]) for j in (pd.ROW_AMPLITUDE, pd.ROW_FREQUENCY,
+                                                             pd.ROW_INTERVAL, pd.ROW_SPEED)))
     # first order in 1/size: two decades of size, two decades of gap
     assert 50 < gaps[0] / gaps[1] < 200 and 50 < gaps[1] / gaps[2] < 200
     assert gaps[2] < 3e-5
@@ -119,7 +121,7 @@ def test_rotor_with_contact_at_the_striker_escapes_as_dynamics_md_finds(j1):
     over the top after a plastic impact on a free rotor; k = 2.5 escapes. (Lighter rotors
     are thrown back by the impact itself: degenerate, tested above.)"""
     code, row = steady(case(model=kr.MODEL_ROTOR, k=2.5, j1=j1, slope=0.0))
-    assert code == 5 and row[0] == REG["escape"]
+    assert code == ST.escape and row[pd.ROW_REGIME] == REG["escape"]
 
 
 # ---------------------------------------------------------------------------- lab blade
@@ -262,8 +264,8 @@ def test_lab_blade_impact_sequence_matches_scipy(model, k, kappa, window):
     assert n >= 3
     np.testing.assert_allclose(phases[:n], ref_phases[:n], atol=1e-7)
     code, row = steady(c)
-    assert code == 0 and row[0] in (REG["period_1"], REG["period_n"])
-    assert row[4] == pytest.approx(ref_speeds[-1], rel=1e-7) or row[0] == REG["period_n"]
+    assert code == ST.ok and row[pd.ROW_REGIME] in (REG["period_1"], REG["period_n"])
+    assert row[pd.ROW_SPEED] == pytest.approx(ref_speeds[-1], rel=1e-7) or row[pd.ROW_REGIME] == REG["period_n"]
 
 
 def test_lab_blade_once_per_turn_after_sliding_off_its_edge():
@@ -272,9 +274,9 @@ def test_lab_blade_once_per_turn_after_sliding_off_its_edge():
     rotor turn, and close to the rotor-stop speed 2 (1+k) = 7 (it meets the blade at
     psi != 0)."""
     code, row = steady(case(tool=kr.TOOL_LAB_WINDOW, window=0.2))
-    assert code == 0 and row[0] == REG["period_1"]
-    assert row[3] == pytest.approx(2 * math.pi, rel=1e-9)
-    assert row[4] == pytest.approx(7.0, rel=0.02)
+    assert code == ST.ok and row[pd.ROW_REGIME] == REG["period_1"]
+    assert row[pd.ROW_INTERVAL] == pytest.approx(2 * math.pi, rel=1e-9)
+    assert row[pd.ROW_SPEED] == pytest.approx(7.0, rel=0.02)
 
 
 def test_H11_border_collision_regime_changes_where_the_impact_meets_the_blade_edge():
@@ -332,7 +334,7 @@ def test_lab_blade_chatter_accumulates_and_ends_as_scipy_does(model, k, kappa, r
     code, row, log = lab_log(c, 6)
     np.testing.assert_allclose(log[:, 0], ref_phases, atol=1e-6)
     code, row = steady(c)  # and the whole run ends, with a regime
-    assert code == 0 and np.isfinite(row[0]) and row[9] > ref.contacts  # chatter counted
+    assert code == ST.ok and np.isfinite(row[pd.ROW_REGIME]) and row[pd.ROW_EVENTS] > ref.contacts  # chatter counted
 
 
 @pytest.mark.parametrize("k, kappa, r, window, period", [
@@ -346,7 +348,7 @@ def test_lab_blade_steady_chatter_regime_matches_scipy(k, kappa, r, window, peri
     c = case(model=pd.MODEL_RIGID, k=k, kappa=kappa, r=r, tool=kr.TOOL_LAB_WINDOW,
              window=window)
     code, row = steady(c)
-    assert code == 0 and row[0] == REG["chatter"]
+    assert code == ST.ok and row[pd.ROW_REGIME] == REG["chatter"]
     ref = LabReference(pd.MODEL_RIGID, k, kappa, r, window)
     ref_phases, _, _ = ref.run(2 + 3 * period)
     assert ref.accumulations >= 2
@@ -355,18 +357,18 @@ def test_lab_blade_steady_chatter_regime_matches_scipy(k, kappa, r, window, peri
     code, _, log = lab_log(c, 2 + 3 * period)
     n = int(np.sum(np.isfinite(log[:, 0])))
     np.testing.assert_allclose(log[:n, 0], ref_phases[:n], atol=1e-6)
-    assert row[3] == pytest.approx(2 * math.pi * round(row[3] * period / (2 * math.pi))
+    assert row[pd.ROW_INTERVAL] == pytest.approx(2 * math.pi * round(row[pd.ROW_INTERVAL] * period / (2 * math.pi))
                                    / period, rel=1e-9)  # whole turns per cycle: phase-locked
 
 
 def test_lab_window_through_the_atlas(tmp_path):
     import xarray as xr
 
-    from sweep import atlas, spec
+    from sweep import runner, spec
     s = spec.parse('mechanism = "rotary_pendulum"\n[fixed]\ntool = "lab_window"\n'
                    'model = "rigid"\nk = 1.0\nkappa = 1.2\n[grid]\n'
                    'tool_window = [0.2, 0.45]\nomega1 = [20.0, 40.0]')
-    atlas.run_sweep(s, tmp_path / "lab.nc", progress=False, history="test")
+    runner.run_sweep(s, tmp_path / "lab.nc", progress=False, history="test")
     ds = xr.open_dataset(tmp_path / "lab.nc")
     assert ds["impact_interval"].attrs["units"] == "rad"
     speed = ds["impact_speed"].values
@@ -547,7 +549,7 @@ def test_rotor_on_the_blade_tends_to_the_rigid_model():
     for size in (1e6, 1e8):
         code, row = steady(case(model=kr.MODEL_ROTOR, k=1.0, kappa=1.2,
                                 tool=kr.TOOL_LAB_WINDOW, window=0.45, j1=size, slope=size))
-        assert code == 0 and row[0] == rigid[0] and row[3] == pytest.approx(rigid[3])
+        assert code == ST.ok and row[pd.ROW_REGIME] == rigid[pd.ROW_REGIME] and row[pd.ROW_INTERVAL] == pytest.approx(rigid[pd.ROW_INTERVAL])
         gaps.append(max(abs(row[j] / rigid[j] - 1) for j in (1, 4, 6)))
     assert gaps[1] < gaps[0] / 30 and gaps[1] < 1e-5  # first order: 1.2e-4, then 1.6e-6
 
@@ -571,4 +573,4 @@ def test_rotor_on_the_blade_chatters_like_the_rigid_model_in_the_limit():
     assert gaps[1] < gaps[0] / 30 and gaps[1] < 1e-4
     code, row = steady(case(model=kr.MODEL_ROTOR, k=k, kappa=kappa, r=r,
                             tool=kr.TOOL_LAB_WINDOW, window=window, j1=1e8, slope=1e8))
-    assert code == 0 and row[0] == REG["chatter"]  # the accumulation is in every cycle
+    assert code == ST.ok and row[pd.ROW_REGIME] == REG["chatter"]  # the accumulation is in every cycle

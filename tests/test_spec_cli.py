@@ -141,14 +141,14 @@ def test_every_builtin_example_parses_and_runs_on_a_corner_of_its_grid(tmp_path,
     run through the whole pipeline to an atlas with units on every variable."""
     import xarray as xr
 
-    from sweep import atlas, spec
+    from sweep import runner, spec
     from sweep.cli import _example_text
 
     s = spec.parse(_example_text(name))
     for axis in s.axes:  # keep the first two values of every axis
         axis.values, axis.codes = axis.values[:2], axis.codes[:2]
     target = tmp_path / f"{name}.nc"
-    atlas.run_sweep(s, target, progress=False, history="example test")
+    runner.run_sweep(s, target, progress=False, history="example test")
     ds = xr.open_dataset(target)
     assert all(ds[v].attrs.get("units") for v in list(ds.data_vars) + list(ds.coords))
     assert ds["status"].size == 2 ** len(s.axes)

@@ -1,0 +1,256 @@
+"""How a mechanism is declared: the one place its names are written.
+
+A ``Mechanism`` declaration lists a mechanism's parameters (name, paper symbol, units,
+long_name, domain, default), its outputs and profiles, its method keys (with their allowed
+words), the status flags its kernel can emit, and the rules between parameters. Everything
+else is derived from it:
+
+- the kernel's index constants (``parameter_index``, ``output_index``, ``profile_index``) and
+  status codes (``status_codes``), as namedtuples of ints that numba freezes as constants;
+- the method record (``method_record``): the kernel receives its options by name;
+- spec validation, CF attributes, ``sweep examples`` and ``sweep parameters`` (in ``sweep/``).
+
+This module is plain Python: no numba, no ``sweep`` imports, so that both sides can use it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable
+
+from kernels.status import CODES
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A parameter of the grid or a method key.
+
+    ``choices`` maps the allowed words (or numbers) of a categorical quantity to the codes the
+    kernel reads; ``aliases`` are words that stand for a numeric code of a numeric quantity
+    (``harmonics = "auto"``). ``used_when`` restricts where the quantity means something:
+    ``{"type": ("b", "general")}`` says it is used only when ``type`` takes one of those values
+    (a quantity given where it is not used is an error, not silently ignored).
+    """
+
+    name: str
+    units: str
+    long_name: str
+    symbol: str = ""
+    default: object = None  # None: no default (required where the rules say so)
+    minimum: float = -math.inf
+    maximum: float = math.inf
+    min_inclusive: bool = True
+    max_inclusive: bool = True
+    nonzero: bool = False
+    integer: bool = False
+    choices: dict | None = None
+    aliases: dict | None = None
+    used_when: dict = field(default_factory=dict)
+
+    def encode(self, value) -> float:
+        """The kernel's code for a value (a word, a number or None for "not given": NaN)."""
+        if value is None:
+            return math.nan
+        if self.aliases and isinstance(value, str) and value in self.aliases:
+            return float(self.aliases[value])
+        if self.choices is not None:
+            for word, code in self.choices.items():
+                if value == word and type(value) is type(word):
+                    return float(code)
+        return float(value)
+
+    def decode(self, code: float):
+        """The word (or number) a kernel code stands for; inverse of ``encode``."""
+        for table in (self.choices, self.aliases):
+            for word, c in (table or {}).items():
+                if float(c) == code:
+                    return word
+        if math.isnan(code):
+            return None
+        return int(code) if self.integer else float(code)
+
+    @property
+    def categorical(self) -> bool:
+        return self.choices is not None
+
+
+#: the common positive-number domain
+POSITIVE = dict(minimum=0.0, min_inclusive=False)
+
+
+@dataclass(frozen=True)
+class Output:
+    """An output of the kernel (or a profile along an extra dimension).
+
+    A flag output (``flags``: meaning -> integer code) is stored as a small integer with CF
+    ``flag_values``/``flag_meanings``; where the kernel writes NaN it gets the code of the
+    meaning ``undetermined``. ``echoes`` names a parameter this output only repeats when that
+    parameter is given (a grid axis then carries it: no data variable collides with it).
+    """
+
+    name: str
+    units: str
+    long_name: str
+    symbol: str = ""
+    description: str = ""
+    flags: dict | None = None
+    undetermined: str | None = None
+    echoes: str | None = None
+
+    @property
+    def is_flag(self) -> bool:
+        return self.flags is not None
+
+    def flag_code_of_nan(self) -> int:
+        return int(self.flags[self.undetermined])
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """Everything the engine, the atlas and the command line need to know of a mechanism.
+
+    ``status``: the status meanings the kernel emits (``ok`` first), a subset of the global
+    table ``kernels.status.CODES`` whose codes are stable across mechanisms.
+    ``usable``: statuses besides ``ok`` whose outputs are still design values.
+    ``rules``: a function of {name: set of given values} (method keys as ``method.NAME``)
+    returning a one-line message for a combination that is not allowed, else None; the
+    ``used_when`` restrictions are checked before it.
+    ``whole_axes``: grid axes the kernel rescales instead of solving again (kept whole in
+    every block). ``profile_coordinate``: method record -> the profile dimension's values.
+    """
+
+    name: str
+    title: str
+    summary: str
+    references: str
+    parameters: tuple[Quantity, ...]
+    outputs: tuple[Output, ...]
+    status: tuple[str, ...]
+    method: tuple[Quantity, ...] = ()
+    usable: tuple[str, ...] = ()
+    profiles: tuple[Output, ...] = ()
+    profile_dim: Quantity | None = None
+    profile_coordinate: Callable | None = None
+    whole_axes: tuple[str, ...] = ()
+    rules: Callable[[dict], str | None] | None = None
+
+    def __post_init__(self):
+        for kind, items in (("parameter", self.parameters), ("output", self.outputs),
+                            ("profile", self.profiles), ("method key", self.method)):
+            names = [q.name for q in items]
+            if len(set(names)) != len(names):
+                raise ValueError(f"{self.name}: repeated {kind} names")
+        if not self.status or self.status[0] != "ok":
+            raise ValueError(f"{self.name}: status must list 'ok' first")
+        unknown = set(self.status) - set(CODES)
+        if unknown:
+            raise ValueError(f"{self.name}: status {sorted(unknown)} not in kernels.status")
+        if not set(self.usable) <= set(self.status):
+            raise ValueError(f"{self.name}: usable statuses must be declared statuses")
+        if bool(self.profiles) != (self.profile_dim is not None):
+            raise ValueError(f"{self.name}: profiles need a profile dimension")
+        names = {p.name for p in self.parameters}
+        for q in self.parameters + self.method:
+            pool = names if q in self.parameters else {m.name for m in self.method}
+            for other in q.used_when:
+                if other not in pool:
+                    raise ValueError(f"{self.name}: {q.name} used_when {other}: unknown")
+        for o in self.outputs:
+            if o.echoes is not None and o.echoes not in names:
+                raise ValueError(f"{self.name}: {o.name} echoes an unknown parameter")
+
+    # ---------------------------------------------------------------- lookups
+
+    def parameter(self, name: str) -> Quantity:
+        for p in self.parameters:
+            if p.name == name:
+                return p
+        raise KeyError(name)
+
+    def output(self, name: str) -> Output:
+        for o in self.outputs + self.profiles:
+            if o.name == name:
+                return o
+        raise KeyError(name)
+
+    def method_key(self, name: str) -> Quantity:
+        for m in self.method:
+            if m.name == name:
+                return m
+        raise KeyError(name)
+
+    # ---------------------------------------------------------------- derived for the kernel
+
+    @cached_property
+    def parameter_index(self):
+        """Row of each parameter in the kernel's parameter matrix: ``P.omega1``."""
+        return _index("Parameters", [p.name for p in self.parameters])
+
+    @cached_property
+    def output_index(self):
+        """Row of each output in the kernel's output matrix: ``O.impact_speed``."""
+        return _index("Outputs", [o.name for o in self.outputs])
+
+    @cached_property
+    def profile_index(self):
+        return _index("Profiles", [o.name for o in self.profiles])
+
+    @cached_property
+    def status_codes(self):
+        """The global code of each declared status: ``S.not_assemblable``."""
+        return namedtuple("Status", self.status)(*[CODES[s] for s in self.status])
+
+    @cached_property
+    def method_type(self):
+        return namedtuple("Method", [m.name for m in self.method])
+
+    def method_record(self, **given):
+        """The kernel's method options by name: codes of the given values, defaults
+        elsewhere (int for whole-number and categorical keys, float otherwise)."""
+        unknown = set(given) - {m.name for m in self.method}
+        if unknown:
+            raise KeyError(f"{self.name}: unknown method keys {sorted(unknown)}")
+        values = []
+        for m in self.method:
+            code = m.encode(given.get(m.name, m.default))
+            values.append(int(code) if (m.integer or m.categorical) else code)
+        return self.method_type(*values)
+
+
+# ---------------------------------------------------------------- shared declarations
+
+#: the code of sigma = "impact" in every kernel that takes an assembly branch
+SIGMA_IMPACT = 0.0
+#: assembly_branch outputs: sigma itself, 0 where no branch was determined
+BRANCH_FLAGS = {"minus": -1, "undetermined": 0, "plus": 1}
+
+
+def assembly_branch() -> Quantity:
+    """sigma: +1, -1 or the branch that makes the special position an impact."""
+    return Quantity("sigma", "1", "assembly branch (sigma): +1, -1, or the impact branch",
+                    symbol="σ", default="impact",
+                    choices={"impact": SIGMA_IMPACT, 1: 1, -1: -1})
+
+
+def geometry_tol(what: str) -> Quantity:
+    """The relative tolerance of the change-point identities (and of ``what``)."""
+    return Quantity("geometry_tol", "1", "relative tolerance of the change-point identities "
+                    f"and {what}; such linkages are modelled as exact change points",
+                    default=1e-9, minimum=0.0, maximum=1e-3)
+
+
+def _index(kind: str, names: list[str]):
+    return namedtuple(kind, names)(*range(len(names)))
+
+
+def used_when_text(q: Quantity) -> str:
+    """``type = "b" or "general"``: where a restricted quantity is used, in words."""
+    return " and ".join(f"{other} = " + " or ".join(_word(v) for v in values)
+                        for other, values in q.used_when.items())
+
+
+def _word(v) -> str:
+    return f'"{v}"' if isinstance(v, str) else repr(v)

@@ -1,0 +1,139 @@
+"""One declaration per mechanism, options by name, no import cycles: the contracts between
+sweep/ and kernels/ (docs/architecture.md)."""
+
+import ast
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from sweep import engine, registry, runner, spec
+from sweep.cli import main
+from tests.conftest import flag_words
+
+ROOT = Path(__file__).resolve().parent.parent
+TOY = '''
+mechanism = "toy"
+[grid]
+radius = [0.1, 0.2, 0.3]
+side = ["near", "far"]
+[fixed]
+omega1 = -20.0
+[method]
+scale = 2.0
+'''
+
+
+def _status_names_used(module_file: Path) -> set[str]:
+    tree = ast.parse(module_file.read_text())
+    return {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)
+            and isinstance(node.value, ast.Name) and node.value.id == "S"}
+
+
+@pytest.mark.parametrize("name", registry.names())
+def test_each_kernel_emits_exactly_the_statuses_it_declares(name):
+    """S = DECLARATION.status_codes: a kernel can only write a declared status (any other
+    name is an AttributeError), and every declared one is written somewhere."""
+    kernel = registry.get(name)
+    path = Path(__import__(registry.MECHANISMS[name], fromlist=["x"]).__file__)
+    assert _status_names_used(path) == set(kernel.declaration.status)
+
+
+def test_no_magic_indices_for_parameters_or_outputs_in_kernels():
+    pattern = re.compile(r"\b(out|outputs|params|pr|method|row|rows|prof|case|geo|vals)"
+                         r"\[\s*\d")
+    hits = [f"{path.name}:{n}: {line.strip()}" for path in sorted((ROOT / "kernels").glob("*.py"))
+            for n, line in enumerate(path.read_text().splitlines(), 1) if pattern.search(line)]
+    assert not hits, hits
+
+
+def _imports(path: Path, package: str) -> set[str]:
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            found |= {n for n in names if n.startswith(package + ".")}
+        elif isinstance(node, ast.Import):
+            found |= {a.name for a in node.names if a.name.startswith(package + ".")}
+    return found
+
+
+def test_sweep_has_no_import_cycles():
+    modules = {f"sweep.{p.stem}": p for p in (ROOT / "sweep").glob("*.py")}
+    graph = {m: {i for i in _imports(p, "sweep") if i in modules and i != m}
+             for m, p in modules.items()}
+
+    def reach(start):
+        seen, todo = set(), [start]
+        while todo:
+            for nxt in graph[todo.pop()]:
+                if nxt not in seen:
+                    seen.add(nxt)
+                    todo.append(nxt)
+        return seen
+
+    cycles = [m for m in graph if m in reach(m)]
+    assert not cycles, {m: graph[m] for m in cycles}
+
+
+def test_a_toy_mechanism_needs_one_declaration_one_kernel_and_one_registry_line(
+        tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(registry.MECHANISMS, "toy", "tests.toy_mechanism")
+    s = spec.parse(TOY)  # validated against its declaration
+    runner.run_sweep(s, tmp_path / "toy.nc", progress=False, history="toy")
+    ds = xr.open_dataset(tmp_path / "toy.nc")
+    np.testing.assert_allclose(ds["tip_speed"].sel(side="far").values,
+                               [4.0, 8.0, 12.0], rtol=1e-15)  # |omega1| r scale
+    assert ds["tip_speed"].attrs["units"] == "m s-1" and ds["radius"].attrs["units"] == "m"
+    assert ds["side_used"].dtype == np.int8
+    assert list(flag_words(ds["side_used"]).ravel()) == ["near", "far"] * 3
+    assert json.loads(ds.attrs["method"])["scale"] == 2.0
+    with pytest.raises(Exception, match="fixed.omega1"):
+        spec.parse(TOY.replace("omega1 = -20.0", "omega1 = 0.0"))
+    with pytest.raises(SystemExit) as e:
+        main(["parameters"])
+    assert e.value.code == 0 and "toy" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as e:
+        main(["parameters", "toy"])
+    text = capsys.readouterr().out
+    assert e.value.code == 0 and "radius" in text and "[m]" in text and "tip_speed" in text
+
+
+def test_method_options_reach_the_kernel_by_name_and_are_words_in_the_atlas(monkeypatch):
+    seen = []
+    s = spec.parse('mechanism = "rotary_pendulum"\n[grid]\nk = [1.5, 2.5]\n'
+                   'omega1 = [20.0, 40.0]\n[method]\nintegrator = "dopri5"\nrtol = 1e-7')
+    real = s.kernel
+
+    def spy(params, method):
+        seen.append((params[s.mechanism.parameter_index.omega1].copy(), method))
+        return real(params, method)
+
+    s.kernel = spy
+    ds = engine.build(s).compute()
+    omega, method = seen[0]
+    assert set(omega) == {20.0, 40.0}
+    assert method.rtol == 1e-7 and method.integrator == s.mechanism.method_key(
+        "integrator").choices["dopri5"]
+    recorded = json.loads(ds.attrs["method"])
+    assert recorded["integrator"] == "dopri5" and recorded["rtol"] == 1e-7
+    assert json.loads(ds.attrs["spec"])["method"]["integrator"] == "dopri5"
+
+
+def test_flag_outputs_are_small_integers_with_their_meanings(tmp_path):
+    s = spec.parse('mechanism = "crank_rocker"\n[grid]\nR = [0.3]\n'
+                   'largest_link = [1.5, 3.0, 30.0]\ntype = ["a", "b"]')
+    runner.run_sweep(s, tmp_path / "cr.nc", progress=False, history="test")
+    ds = xr.open_dataset(tmp_path / "cr.nc")
+    for name in ("crank_turns_fully", "assembly_branch", "status"):
+        assert ds[name].dtype == np.int8 and "_FillValue" not in ds[name].encoding
+    turns = flag_words(ds["crank_turns_fully"])[0]
+    branch = flag_words(ds["assembly_branch"])[0]
+    # type a at 1.5 < gamma: no full turn; type b at 1.5 and 3: no real synthesis
+    assert list(turns[:, 0]) == ["no", "yes", "yes"]
+    assert list(turns[:, 1]) == ["undetermined", "undetermined", "yes"]
+    assert list(branch[:, 0]) == ["undetermined", "minus", "minus"]
+    assert branch[2, 1] == "plus"  # type b strikes on sigma = +1 for omega1 > 0
