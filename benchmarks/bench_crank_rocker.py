@@ -58,7 +58,7 @@ def numpy_crank_rocker(p, tol):
     lam3[c] = big[c] * (big[c] + 1) / (g2[c] + big[c])
     bb = 1 + big
     disc = bb * bb - 4 * g2 * big
-    disc = np.where(b & (disc < 0) & (disc >= -tol * bb * bb), 0.0, disc)
+    disc = np.where(b & (disc < 0) & (disc >= -cr.BOUND_ROUNDING * bb * bb), 0.0, disc)
     with np.errstate(invalid="ignore"):
         larger = 0.5 * (bb + np.sqrt(disc))
     lam3[b] = big[b]

@@ -26,6 +26,8 @@ from kernels.fourbar import (
 
 TYPE_A, TYPE_B, TYPE_C, TYPE_GENERAL = 0, 1, 2, 3  # largest rod, rocker, base; any four-bar
 ROOT_SMALLER_BASE, ROOT_LARGER_BASE = 0, 1
+#: a type-b discriminant this far below 0 (relative to its terms) is rounding at the bound
+BOUND_ROUNDING = 64 * 2.220446049250313e-16
 _TYPES = ("a", "b", "c")
 _LINKS = ("largest_link", "lambda0", "lambda2", "lambda3")
 #: the ways each type may be given its geometry (seed 000's tables are indexed by the
@@ -162,17 +164,19 @@ def synthesize_largest_base(lam0, r):
 
 
 @njit(**KERNEL_OPTIONS)
-def synthesize_largest_rocker(lam3, r, larger_base, tol):
+def synthesize_largest_rocker(lam3, r, larger_base):
     """Type b (derived, linkages.md §3.1): lambda0, lambda2 are the roots of
     t^2 - (1 + lambda3) t + gamma^2 lambda3 = 0. Returns (lambda0, lambda2), NaN if complex.
 
-    The smaller root is taken from the product of the roots to avoid cancellation.
+    The smaller root is taken from the product of the roots to avoid cancellation. A rocker
+    within rounding of the bound (a discriminant above -BOUND_ROUNDING (1 + lambda3)^2, about
+    1e-14 relative in lambda3) is the bound itself: one double root; below it, NaN.
     """
     g2 = gamma_from_restitution(r) ** 2
     b = 1.0 + lam3
     disc = b * b - 4.0 * g2 * lam3
     if disc < 0.0:
-        if disc < -tol * b * b:
+        if disc < -BOUND_ROUNDING * b * b:
             return math.nan, math.nan
         disc = 0.0
     big = 0.5 * (b + math.sqrt(disc))
@@ -186,11 +190,13 @@ def synthesize_largest_rocker(lam3, r, larger_base, tol):
 def synthesize_largest_rocker_from_base(lam0, r):
     """Type b given lambda0: lambda3 = l0(l0-1)/(l0-g^2), lambda2 = g^2(l0-1)/(l0-g^2).
 
-    Returns (lambda2, lambda3), NaN where no positive solution exists (lambda0 = gamma^2).
+    Returns (lambda2, lambda3), NaN unless lambda0 > gamma^2: for 1 < lambda0 < gamma^2 the
+    solution is negative, and for lambda0 < 1 it is positive but not a largest-rocker
+    four-bar (lambda3 < 1): no synthesis of type b either way.
     """
     g2 = gamma_from_restitution(r) ** 2
     den = lam0 - g2
-    if den == 0.0:
+    if not den > 0.0:
         return math.nan, math.nan
     lam3 = lam0 * (lam0 - 1.0) / den
     lam2 = g2 * (lam0 - 1.0) / den
@@ -271,7 +277,7 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
                 lam0 = lam0_in
                 lam2, lam3 = synthesize_largest_rocker_from_base(lam0, r)
             else:
-                lam0, lam2 = synthesize_largest_rocker(lam3, r, root == ROOT_LARGER_BASE, tol)
+                lam0, lam2 = synthesize_largest_rocker(lam3, r, root == ROOT_LARGER_BASE)
             if lam3 > 0.0:
                 g_max = (1.0 + lam3) / (2.0 * math.sqrt(lam3))
                 rk_max = (g_max - 1.0) / (g_max + 1.0)
@@ -327,14 +333,16 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
         sigma = impact_sigma if sigma_code == SIGMA_IMPACT else sigma_code
         before, after = branch_values(kind, lam0, gamma, sigma, direction)
         branch = sigma
-        rk = after / before
+        # gamma = 1: one branch value is 0 and the rocker stops at the node: no Rk exists
+        rk = after / before if before != 0.0 else nan
         ratio = abs(before)
         speed = ratio * abs(w) * lam3 * l1
-        if not (math.isfinite(rk) and math.isfinite(before) and math.isfinite(after)
-                and math.isfinite(speed) and math.isfinite(gamma) and math.isfinite(mu_min)):
+        if gamma <= 1.0:
+            status = S.no_impact  # the rocker does not reverse at the node
+        elif not (math.isfinite(rk) and math.isfinite(before) and math.isfinite(after)
+                  and math.isfinite(speed) and math.isfinite(gamma)
+                  and math.isfinite(mu_min)):
             status = S.nonfinite
-        elif not (gamma > 1.0):
-            status = S.no_impact
         elif sigma != impact_sigma:
             status = S.wrong_branch
         elif count > 1:

@@ -58,25 +58,3 @@ def atan2_fast(y, x):
     if x < 0.0:
         return a + math.pi if y >= 0.0 else a - math.pi
     return a
-
-
-_GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
-
-
-@njit(**KERNEL_OPTIONS)
-def golden_points(a, b):
-    """The two interior points (c, d) of a golden-section search for a maximum on [a, b]."""
-    return b - _GOLDEN * (b - a), a + _GOLDEN * (b - a)
-
-
-@njit(**KERNEL_OPTIONS)
-def golden_shrink(a, b, c, d, fc, fd):
-    """One golden-section step towards the maximum, keeping one of the two values. Returns
-    (a, b, c, d, fc, fd, left): the caller evaluates the new point, c if left else d, and
-    stores it in fc or fd. One evaluation per step; a location error e costs O(e^2) in the
-    maximum's value."""
-    if fc > fd:
-        b, d, fd = d, c, fc
-        return a, b, b - _GOLDEN * (b - a), d, fc, fd, True
-    a, c, fc = c, d, fd
-    return a, b, c, a + _GOLDEN * (b - a), fc, fd, False

@@ -23,7 +23,7 @@ from kernels import KERNEL_OPTIONS
 from kernels.crank_rocker import impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol)
-from kernels.elementary import golden_points, golden_shrink
+from kernels.extrema import clustered_points, peak_search
 from kernels.fourbar import (
     CHANGE_POINT_A,
     CHANGE_POINT_B,
@@ -171,6 +171,9 @@ PEAK_A, PEAK_B, PEAK_C, PEAK_D, PEAK_MB = range(5)
 N_PEAKS = 5
 PEAK_ROWS = (O.force_peak_A, O.force_peak_B, O.force_peak_C, O.force_peak_D,
              O.balancing_moment_peak)
+#: golden section brackets a peak's crank angle to this [rad]: the value is then exact to
+#: O(bracket^2), far below round-off
+PEAK_LOCATION = 1e-9
 #: outputs that must be finite for a point to be ok
 CHECKED_ROWS = PEAK_ROWS + (O.balancing_moment_rms, O.cycle_work)
 
@@ -320,24 +323,30 @@ def _peak_quantity(q, res):
 
 
 @njit(**KERNEL_OPTIONS)
-def _refine_peak(q, a, b, sampled, pr, sigma, res, tol, gx, gy):
-    """Golden section for the maximum of quantity q on [a, b] (one sample spacing either
-    side of the best sample), to 1e-10 of the interval: a location error d costs O(d^2) in
-    the value. Never below the sampled maximum."""
-    def value(phi):
-        if not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
-            return -1.0
-        return _peak_quantity(q, res)
+def _peak_at(phi, data):
+    """Quantity q at crank angle phi (NaN where the loop cannot close); data as packed by
+    _point."""
+    q, pr, sigma, res, tol, gx, gy = data
+    if not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
+        return math.nan
+    return _peak_quantity(q, res)
 
-    c, d = golden_points(a, b)
-    fc, fd = value(c), value(d)
-    while b - a > 1e-10 * (1.0 + abs(a)):
-        a, b, c, d, fc, fd, left = golden_shrink(a, b, c, d, fc, fd)
-        if left:
-            fc = value(c)
-        else:
-            fd = value(d)
-    return max(sampled, fc, fd)
+
+_golden_peak, _refine_peak = peak_search(_peak_at)
+
+
+@njit(**KERNEL_OPTIONS)
+def cycle_pieces(kind, count, window):
+    """The smooth pieces of a crank cycle outside the windows around its special positions
+    (H10, H11): (starts, ends). The cycle starts at the impact node phi1*; a second node sits
+    at phi1* + pi. Without a special position the cycle is one periodic piece."""
+    start = math.pi if kind == CHANGE_POINT_C else 0.0
+    if kind == 0:
+        return np.array([0.0]), np.array([2.0 * math.pi])
+    if count > 1:
+        return (np.array([start + window, start + math.pi + window]),
+                np.array([start + math.pi - window, start + 2.0 * math.pi - window]))
+    return np.array([start + window]), np.array([start + 2.0 * math.pi - window])
 
 
 @njit(**KERNEL_OPTIONS)
@@ -374,45 +383,40 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     start = math.pi if kind == CHANGE_POINT_C else 0.0  # cycle (phi1*, phi1* + 2 pi)
     gx, gy = -pr[P.g] * math.sin(pr[P.tilt]), -pr[P.g] * math.cos(pr[P.tilt])  # base frame
 
-    # cycle work and RMS of M_b: Gauss-Legendre on the open cycle, one-sided at the node
-    half = math.pi
+    # cycle work and RMS of M_b: Gauss-Legendre on each open piece between special
+    # positions (M_b jumps at a node: one-sided there, never integrated across)
+    pieces = 2 if count > 1 else 1
+    half = math.pi / pieces
     work = 0.0
     square = 0.0
-    for k in range(gl_x.shape[0]):
-        if not _joint_forces(start + half * (gl_x[k] + 1.0), pr, sigma, res, tol, gx, gy):
-            return S.not_assemblable
-        work += half * gl_w[k] * res[R_MB]
-        square += half * gl_w[k] * res[R_MB] * res[R_MB]
+    for piece in range(pieces):
+        base = start + 2.0 * half * piece
+        for k in range(gl_x.shape[0]):
+            if not _joint_forces(base + half * (gl_x[k] + 1.0), pr, sigma, res, tol, gx, gy):
+                return S.not_assemblable
+            work += half * gl_w[k] * res[R_MB]
+            square += half * gl_w[k] * res[R_MB] * res[R_MB]
     out[O.balancing_moment_rms] = math.sqrt(square / (2.0 * math.pi))
     out[O.cycle_work] = direction * work  # energy delivered by the drive per cycle
 
-    # peaks outside |phi1 - node| < window (H11: F^n ~ 1/dphi1): a uniform sample finds
-    # each maximum's basin, golden section on the exact kinetostatics refines it
-    lo = start + (window if kind != 0 else 0.0)
-    hi = start + 2.0 * math.pi - (window if kind != 0 else 2.0 * math.pi / n_peak)
-    spacing = (hi - lo) / (n_peak - 1)
-    best = np.full(N_PEAKS, -1.0)
-    where = np.zeros(N_PEAKS)
-    for k in range(n_peak):
-        phi = lo + spacing * k
-        if count > 1 and abs(phi - start - math.pi) < window:
-            continue  # the second node at phi1* + pi (H10)
-        if not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
-            return S.not_assemblable
+    # peaks outside |phi1 - node| < window (H11: F^n ~ 1/dphi1), piece by piece: the
+    # window's edges, a sample clustered towards them, and golden section on the exact
+    # kinetostatics around every sampled local maximum (kernels/extrema.py)
+    lows, highs = cycle_pieces(kind, count, window)
+    best = np.full(N_PEAKS, -math.inf)
+    for piece in range(lows.shape[0]):
+        xs = clustered_points(lows[piece], highs[piece], max(3, n_peak // lows.shape[0]))
+        values = np.empty((N_PEAKS, xs.shape[0]))
+        for j in range(xs.shape[0]):
+            if not _joint_forces(xs[j], pr, sigma, res, tol, gx, gy):
+                return S.not_assemblable
+            for q in range(N_PEAKS):
+                values[q, j] = _peak_quantity(q, res)
         for q in range(N_PEAKS):
-            value = _peak_quantity(q, res)
-            if value > best[q]:
-                best[q], where[q] = value, phi
+            best[q] = max(best[q], _refine_peak((q, pr, sigma, res, tol, gx, gy), xs,
+                                                values[q], PEAK_LOCATION))
     for q in range(N_PEAKS):
-        a, b = where[q] - spacing, where[q] + spacing
-        if kind != 0:  # stay out of the node's window (a smooth cycle is periodic)
-            a, b = max(lo, a), min(hi, b)
-        if count > 1:  # stay out of the second node's window
-            if where[q] < start + math.pi:
-                b = min(b, start + math.pi - window)
-            else:
-                a = max(a, start + math.pi + window)
-        out[PEAK_ROWS[q]] = _refine_peak(q, a, b, best[q], pr, sigma, res, tol, gx, gy)
+        out[PEAK_ROWS[q]] = best[q]
 
     # profiles: the rigid-model values at every sampled angle (NaN only exactly at a node)
     for j in range(prof_angles.shape[0]):

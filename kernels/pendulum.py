@@ -21,7 +21,7 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS
 from kernels.status import CODES
-from kernels.elementary import golden_points, golden_shrink
+from kernels.extrema import golden_points, golden_shrink
 
 MODEL_PAPER, MODEL_RIGID = 0, 1
 #: meanings of the codes of the ``regime`` output (CF flag_meanings, in this order)

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels.elementary import golden_points, golden_shrink
+from kernels.extrema import golden_points, golden_shrink
 from kernels.pendulum import *  # noqa: F401,F403  (ROW_*, REGIME_*)
 from kernels.pendulum import (_first_crossing, accepted_step_size, classify_period,
                               initial_step, next_step, turning_time)

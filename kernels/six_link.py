@@ -23,7 +23,7 @@ from kernels import KERNEL_OPTIONS
 from kernels.crank_rocker import branch_values, impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quantity,
                                  geometry_tol)
-from kernels.elementary import golden_points, golden_shrink
+from kernels.extrema import clustered_points, peak_search
 from kernels.fourbar import CHANGE_POINT_B, crank_turns_fully, vector_kinematics
 
 DECLARATION = Mechanism(
@@ -163,24 +163,52 @@ def _transfer(phi, lam6, lam2, lam3, mu6, mu4, mu5, sigma2, offset, tol):
 
 
 @njit(**KERNEL_OPTIONS)
-def _refine_peak(which, a, b, sampled, lam6, lam2, lam3, mu6, mu4, mu5, sigma2, offset, tol):
-    """Golden section for the maximum of |u51| (which = 0) or |u'51| (1) on [a, b], to 1e-10
-    of the interval; never below the sampled maximum (a jump at an impact is covered by
-    the exact one-sided values)."""
-    def value(phi):
-        u51, du51 = _transfer(phi, lam6, lam2, lam3, mu6, mu4, mu5, sigma2, offset, tol)
-        v = abs(u51) if which == 0 else abs(du51)
-        return v if math.isfinite(v) else -1.0
+def _abs_u51(phi, data):
+    return abs(_transfer(phi, *data)[0])
 
-    c, d = golden_points(a, b)
-    fc, fd = value(c), value(d)
-    while b - a > 1e-10 * (1.0 + abs(a)):
-        a, b, c, d, fc, fd, left = golden_shrink(a, b, c, d, fc, fd)
-        if left:
-            fc = value(c)
-        else:
-            fd = value(d)
-    return max(sampled, fc, fd)
+
+@njit(**KERNEL_OPTIONS)
+def _abs_du51(phi, data):
+    return abs(_transfer(phi, *data)[1])
+
+
+_golden_u51, _refine_u51 = peak_search(_abs_u51)
+_golden_du51, _refine_du51 = peak_search(_abs_du51)
+#: the search keeps this far [rad] from a piece's ends (an impact, stage 1's node): the
+#: transfer functions divide by sin(phi3 - phi2), which loses digits nearer a node. u51's
+#: one-sided values there are closed form and candidates of their own; u'51's is taken
+#: this far inside, within about |u''51| END_MARGIN
+END_MARGIN = 1e-7
+#: sample points approach the margin geometrically, to 2^-CLUSTER_DEPTH of the piece
+CLUSTER_DEPTH = 20
+#: golden section brackets a peak's crank angle to this [rad]
+PEAK_LOCATION = 1e-10
+
+
+@njit(**KERNEL_OPTIONS)
+def _cycle_peaks(data, n_samples, impacts, peak):
+    """Peaks of |u51| and |u'51| over the 4 pi cycle, by its smooth pieces: between the two
+    impacts (where u53 jumps) and stage 1's nodes at 0, 2 pi, 4 pi (where u31 has a narrow
+    spike as lambda6 -> 1), each sampled with points clustered towards its ends, every
+    sampled local maximum refined by golden section (kernels/extrema.py). ``peak``: the
+    one-sided values at the ends already known."""
+    breaks = np.array([0.0, TWO_PI, 2.0 * TWO_PI, impacts[0], impacts[1]])
+    breaks.sort()
+    peak2 = 0.0
+    for piece in range(breaks.shape[0] - 1):
+        a, b = breaks[piece] + END_MARGIN, breaks[piece + 1] - END_MARGIN
+        if b - a <= END_MARGIN:
+            continue
+        n = max(8, int(n_samples * (b - a) / (2.0 * TWO_PI)))
+        xs = clustered_points(a, b, n, CLUSTER_DEPTH)
+        u51 = np.empty(xs.shape[0])
+        du51 = np.empty(xs.shape[0])
+        for j in range(xs.shape[0]):
+            u, du = _transfer(xs[j], *data)
+            u51[j], du51[j] = abs(u), abs(du)
+        peak = max(peak, _refine_u51(data, xs, u51, PEAK_LOCATION))
+        peak2 = max(peak2, _refine_du51(data, xs, du51, PEAK_LOCATION))
+    return peak, peak2
 
 
 @njit(**KERNEL_OPTIONS)
@@ -214,9 +242,11 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
     start = math.pi + offset  # phi3 = pi at the node phi1 = 0
     k = math.floor(start / TWO_PI) + 1
     peak = 0.0
+    impacts = np.empty(2)
     for j in range(2):
         target = TWO_PI * (k + j)
         phi_i = _impact_angle(target, lam6, lam2, lam3, offset, tol)
+        impacts[j] = phi_i % (2.0 * TWO_PI)
         u31 = stage1(phi_i, lam6, lam2, lam3, tol)[1]
         m = round(phi_i / TWO_PI)
         if math.isnan(u31) or abs(phi_i - TWO_PI * m) < 1e-12:
@@ -229,25 +259,14 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
         out[row_speed] = abs(u51) * w * mu5 * lam3 * l1
         peak = max(peak, abs(u51), abs(u31 * after53))
 
-    # peaks of |u51| and |u'51|: a uniform sample of the 4 pi cycle (nodes excluded) finds
-    # each maximum's basin, golden section on the exact kinematics refines it
-    peak2 = 0.0
-    n = 2 * (n_samples // 2)
-    spacing = 2.0 * TWO_PI / n
-    where1 = where2 = 0.0
-    for j in range(n):
-        phi = spacing * (j + 0.5)
-        u51, du51 = _transfer(phi, lam6, lam2, lam3, mu6, mu4, mu5, sigma2, offset, tol)
-        if math.isfinite(u51) and abs(u51) > peak:
-            peak, where1 = abs(u51), phi
-        if math.isfinite(du51) and abs(du51) > peak2:
-            peak2, where2 = abs(du51), phi
-    if where1 != 0.0:
-        peak = _refine_peak(0, where1 - spacing, where1 + spacing, peak, lam6, lam2, lam3,
-                            mu6, mu4, mu5, sigma2, offset, tol)
-    if where2 != 0.0:
-        peak2 = _refine_peak(1, where2 - spacing, where2 + spacing, peak2, lam6, lam2, lam3,
-                             mu6, mu4, mu5, sigma2, offset, tol)
+    # u51 at stage 1's nodes (0 and 2 pi; 4 pi repeats 0): its closed-form node values
+    for m in range(2):
+        phi3 = stage1(TWO_PI * m, lam6, lam2, lam3, tol)[0]
+        u53 = vector_kinematics(phi3 + offset, mu6, 1.0, mu4, mu5, sigma2, tol)[7]
+        node = abs(stage1_node_value(m, lam6, gamma1) * u53)
+        peak = max(peak, node if math.isfinite(node) else 0.0)
+    data = (lam6, lam2, lam3, mu6, mu4, mu5, sigma2, offset, tol)
+    peak, peak2 = _cycle_peaks(data, n_samples, impacts, peak)
     out[O.transfer_peak], out[O.transfer2_peak] = peak, peak2
 
     for j in range(prof_angles.shape[0]):

@@ -137,3 +137,61 @@ def test_flag_outputs_are_small_integers_with_their_meanings(tmp_path):
     assert list(turns[:, 1]) == ["undetermined", "undetermined", "yes"]
     assert list(branch[:, 0]) == ["undetermined", "minus", "minus"]
     assert branch[2, 1] == "plus"  # type b strikes on sigma = +1 for omega1 > 0
+
+
+#: what each mechanism needs besides the swept parameter, and per parameter what it needs
+BASES = {"crank_rocker": dict(largest_link=3.0)}
+NEEDS = {
+    ("crank_rocker", "largest_link"): dict(),
+    ("crank_rocker", "lambda0"): dict(type="general", lambda2=3.0, lambda3=2.0,
+                                      largest_link=None),
+    ("crank_rocker", "lambda2"): dict(type="general", lambda0=2.0, lambda3=2.0,
+                                      largest_link=None),
+    ("crank_rocker", "lambda3"): dict(type="general", lambda0=2.0, lambda2=3.0,
+                                      largest_link=None),
+    ("crank_rocker", "base_root"): dict(type="b", largest_link=14.0),
+    ("rotary_pendulum", "kappa"): dict(model="rigid"),
+    ("rotary_pendulum", "tool_window"): dict(model="rigid", kappa=1.2, k=1.0,
+                                             tool="lab_window"),
+    **{("rotary_pendulum", name): dict(model="rotor", kappa=1.2, k=1.0)
+       for name in ("rotor_inertia_ratio", "motor_slope", "idle_speed")},
+    **{("linkage_forces", name): dict(base_motion="rotating")
+       for name in ("base_omega", "base_epsilon", "crank_pivot_x", "crank_pivot_y")},
+}
+VALUES = {("crank_rocker", "lambda0"): [2.0, 2.5], ("crank_rocker", "lambda2"): [3.0, 2.5],
+          ("crank_rocker", "lambda3"): [2.0, 1.5], ("crank_rocker", "largest_link"): [3.0, 4.0],
+          ("rotary_pendulum", "kappa"): [1.2, 1.5]}
+
+
+def _two_values(mechanism, p):
+    if (mechanism, p.name) in VALUES:
+        return VALUES[mechanism, p.name]
+    if p.choices is not None:
+        return list(p.choices)[:2]
+    d = p.default
+    return [d, d * 1.1] if d else [0.0, 0.1]
+
+
+@pytest.mark.parametrize("mechanism", registry.names())
+def test_every_parameter_of_every_mechanism_can_be_swept(mechanism):
+    """Each parameter on the grid, through the engine to a Dataset: its coordinate carries
+    its values and every output is a variable, except one that only echoes a grid axis
+    (crank_rocker's lambdas: they once collided with the axis, issue 12)."""
+    mech = registry.get(mechanism).declaration
+    for p in mech.parameters:
+        fixed = dict(BASES.get(mechanism, {}))
+        fixed.update(NEEDS.get((mechanism, p.name), {}))
+        fixed = {k: v for k, v in fixed.items() if v is not None and k != p.name}
+        raw = {"mechanism": mechanism, "grid": {p.name: _two_values(mechanism, p)},
+               "fixed": fixed}
+        s = spec.validate(raw)
+        ds = engine.build(s).compute()
+        assert list(ds[p.name].values) == [str(v) if p.choices else float(v)
+                                           for v in raw["grid"][p.name]], p.name
+        for o in mech.outputs:
+            assert o.name in ds.data_vars or o.echoes == p.name, (p.name, o.name)
+        echo = [o.name for o in mech.outputs if o.echoes == p.name]
+        for name in echo:  # the echo equals the axis: nothing is lost by dropping it
+            values = s.kernel(engine.block_parameters(s, [(0, 2)]), s.method_record)[0]
+            row = getattr(mech.output_index, name)
+            np.testing.assert_array_equal(values[row], ds[p.name].values)

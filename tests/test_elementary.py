@@ -35,7 +35,7 @@ def test_atan2_fast_quadrants_and_accuracy():
 
 
 def test_golden_section_finds_a_maximum_with_one_evaluation_per_step():
-    from kernels.elementary import golden_points, golden_shrink
+    from kernels.extrema import golden_points, golden_shrink
     calls = []
 
     def f(x):

@@ -152,3 +152,20 @@ def test_every_builtin_example_parses_and_runs_on_a_corner_of_its_grid(tmp_path,
     ds = xr.open_dataset(target)
     assert all(ds[v].attrs.get("units") for v in list(ds.data_vars) + list(ds.coords))
     assert ds["status"].size == 2 ** len(s.axes)
+
+
+def test_crank_rocker_sweeps_its_own_link_ratios_through_the_cli(tmp_path):
+    """Issue 12, item 1: this spec computed, then exited 1 ("variables {'lambda2'} are found
+    in both data_vars and coords"). The output lambda2 only echoes the axis: the axis
+    carries it."""
+    import xarray as xr
+
+    spec = tmp_path / "general.toml"
+    spec.write_text('mechanism = "crank_rocker"\n[grid]\nlambda2 = [2.5, 3.0]\n[fixed]\n'
+                    'type = "general"\nlambda0 = 2.0\nlambda3 = 1.5\n')
+    with pytest.raises(SystemExit) as e:
+        main(["run", str(spec), "-o", str(tmp_path / "general.nc"), "-q"])
+    assert e.value.code == 0
+    ds = xr.open_dataset(tmp_path / "general.nc")
+    assert list(ds["lambda2"].values) == [2.5, 3.0] and "lambda2" not in ds.data_vars
+    assert set(ds["lambda0"].values) == {2.0} and set(ds["lambda3"].values) == {1.5}
