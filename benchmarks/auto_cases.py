@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from kernels import pendulum as pd
+from kernels.pendulum.models import paper_critical_speed
 from sweep import registry
 
 KERNEL = registry.get("rotary_pendulum")
@@ -29,7 +29,7 @@ def points(model, n, seed):
     cols["omega1"] = rng.uniform(20, 100, n)
     cols["l2"] = rng.uniform(0.02, 0.06, n)
     if model == "paper":
-        crit = np.array([pd.paper_critical_speed(x, 4.0) for x in k])
+        crit = np.array([paper_critical_speed(x, 4.0) for x in k])
         cols["R"] = rng.uniform(0, 0.8, n) * (crit - 1 - k) / (crit + 1 + k)
     else:  # contact outboard of the centre of percussion, so that the pendulum returns
         cols["kappa"] = (1 + k) ** 2 / (4 * k) * rng.uniform(1.1, 1.5, n)

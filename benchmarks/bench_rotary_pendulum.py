@@ -1,41 +1,113 @@
-"""Rotary pendulum: trajectories to the steady state per second per core, closed form vs
-DOPRI5 (numba, rtol 1e-8) vs SciPy solve_ivp (DOP853 with an impact event and a restart
-loop, the same tolerance), on the paper model at random (k, R) below R_crit.
+"""Rotary pendulum: steady states per second per core for each model x tool (DOPRI5 at rtol
+1e-8 through the kernel's entry point, as a sweep runs it), the closed form, and SciPy's
+solve_ivp (DOP853 with an impact event and a restart loop, the same tolerance) on the
+paper model.
 
-Run: .venv/bin/python benchmarks/bench_rotary_pendulum.py   (writes benchmarks/results/*.json)
+With ``--against REF`` (a git revision) the same designs also run on that revision's
+kernels, in a checkout of their own, the two in turn (A B A B ...), and the ratios
+(this tree over REF) are printed: the throughput before and after a change, in one run.
+
+Run: .venv/bin/python benchmarks/bench_rotary_pendulum.py [--against REF]
+     (writes benchmarks/results/rotary_pendulum.json)
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
+import os
 import platform
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-from kernels import pendulum as pd  # noqa: E402
-from kernels import rotary_pendulum as kr  # noqa: E402
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, os.environ.get("BENCH_ROOT", str(HERE.parent)))
 
 XI = 4.0
+SYSTEMS = [(m, t) for t in ("rotor_stop", "lab_window") for m in ("paper", "rigid", "rotor")]
+DESIGNS = {"rotor_stop": 400, "lab_window": 12}  # per system
 
 
-def cases(n, seed=6):
+def designs(kr, model, tool, n, seed):
+    """n random designs of a model on a tool that reach a steady state at most points, as
+    the kernel's parameter matrix (only public names: the same on any revision)."""
+    decl = kr.DECLARATION
     rng = np.random.default_rng(seed)
-    k = rng.uniform(1.0, 2.5, n)
-    v_crit = np.array([pd.paper_critical_speed(x, XI) for x in k])
-    r_crit = (v_crit - 1 - k) / (v_crit + 1 + k)
-    return k, rng.uniform(0.0, 0.8, n) * r_crit
+    cols = {p.name: np.full(n, p.encode(p.default) if p.default is not None else math.nan)
+            for p in decl.parameters}
+    cols["model"][:] = decl.parameter("model").encode(model)
+    cols["tool"][:] = decl.parameter("tool").encode(tool)
+    if tool == "rotor_stop":
+        k = rng.uniform(1.0, 2.5, n)
+        cols["k"] = k
+        if model == "paper":  # R below R_crit, which the closed form gives
+            probe = np.array([cols[p.name] for p in decl.parameters])
+            out, _, _ = kr.run(probe, decl.method_record(integrator="closed_form"))
+            r_crit = out[decl.output_index.restitution_critical]
+            cols["R"] = rng.uniform(0.0, 0.8, n) * r_crit
+        else:  # contact outboard of the centre of percussion: the pendulum returns
+            cols["kappa"] = (1 + k) ** 2 / (4 * k) * rng.uniform(1.1, 1.5, n)
+            cols["R"] = rng.uniform(0.0, 0.02, n)
+    else:  # the blade example's family
+        cols["k"] = np.full(n, 1.0 if model != "paper" else 2.5)
+        cols["kappa"] = np.full(n, 1.2)
+        cols["tool_window"] = rng.uniform(0.1, 0.5, n)
+        cols["R"] = np.where(rng.uniform(size=n) < 0.5, 0.0, rng.uniform(0.0, 0.01, n))
+    if model == "rotor":
+        cols["rotor_inertia_ratio"] = rng.uniform(20, 200, n)
+        cols["motor_slope"] = rng.uniform(3, 50, n)
+    return np.array([cols[p.name] for p in decl.parameters])
+
+
+def measure(repeats=5):
+    """Steady states per second of each system at DOPRI5 rtol 1e-8 (best of repeats, after
+    a warm-up that compiles), and of the closed form."""
+    from kernels import rotary_pendulum as kr
+    decl = kr.DECLARATION
+    dopri = decl.method_record(integrator="dopri5", rtol=1e-8, atol=1e-10)
+    result = {}
+    for i, (model, tool) in enumerate(SYSTEMS):
+        params = designs(kr, model, tool, DESIGNS[tool], seed=100 + i)
+        kr.run(params[:, :1], dopri)  # compile
+        best = math.inf
+        for _ in range(repeats):
+            t = time.perf_counter()
+            kr.run(params, dopri)
+            best = min(best, time.perf_counter() - t)
+        result[f"{model} on {tool}"] = params.shape[1] / best
+    params = designs(kr, "paper", "rotor_stop", 2000, seed=7)
+    closed = decl.method_record(integrator="closed_form")
+    kr.run(params[:, :1], closed)
+    best = math.inf
+    for _ in range(repeats):
+        t = time.perf_counter()
+        kr.run(params, closed)
+        best = min(best, time.perf_counter() - t)
+    result["paper closed form"] = params.shape[1] / best
+    return result
+
+
+def measure_in(root: Path) -> dict:
+    """measure() on the kernels of another checkout, in a process of its own."""
+    env = dict(os.environ, BENCH_ROOT=str(root))
+    out = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--measure"],
+                         env=env, capture_output=True, text=True)
+    if out.returncode:
+        raise SystemExit(f"measuring in {root} failed:\n{out.stderr}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def scipy_steady_state(k, r, rtol, max_impacts=200):
     """The straightforward SciPy route: integrate flight by flight with an event at psi = 0
     (upward), apply the impact law, restart, until the impact speed converges."""
+    from scipy.integrate import solve_ivp
+
     def rhs(t, y):
         x = k * k + 1 + 2 * k * math.cos(y[0])
         return [y[1], -k * x / (1 + XI * x) * (y[1] ** 2 + XI) * math.sin(y[0])]
@@ -45,13 +117,11 @@ def scipy_steady_state(k, r, rtol, max_impacts=200):
     impact.terminal, impact.direction = True, 1
 
     v, tau1 = 0.0, math.nan
-    scipy_steady_state.flights = 0
     for _ in range(max_impacts):
         launch = (1 + k) * (1 + r) + r * v
         # start just below the surface so the restart point is not an event (H4)
         sol = solve_ivp(rhs, (0, 100), [-1e-12, -launch], method="DOP853", events=impact,
                         rtol=rtol, atol=rtol * 1e-2)
-        scipy_steady_state.flights += 1
         if not sol.t_events[0].size:
             return math.nan, math.nan
         v_new, tau1 = sol.y_events[0][0][1], sol.t_events[0][0]
@@ -61,76 +131,63 @@ def scipy_steady_state(k, r, rtol, max_impacts=200):
     return v, tau1
 
 
-def main():
-    ks, rs = cases(400)
-    out = np.empty(pd.N_ROW)
-    pd.dimensionless(0, 2.0, XI, 0.8, 0.1, 1, 0, 0, 0, 1000, out)
-    pd.dimensionless(0, 2.0, XI, 0.8, 0.1, 3, 1e-8, 1e-10, 0, 1000, out)
-    result = {"machine": platform.node()}
-    n = len(ks)
-    cases_arr = np.stack([np.zeros(n), ks, np.full(n, XI), np.full(n, 0.8), rs, np.zeros(n),
-                          np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)], axis=1)
-    rows = np.empty((n, kr.N_ROW))
-    status = np.empty(n, dtype=np.int8)
-    for name, integrator, rtol in (("closed_form", 1, 0.0), ("dopri5_rtol_1e-8", 3, 1e-8)):
-        kr.pendulum_block(cases_arr[:2], integrator, rtol, rtol * 1e-2, 0.0, 1000, rows,
-                          status)
-        best = math.inf
-        for _ in range(3):  # batched in numba, as the engine runs it; best of three
-            t = time.perf_counter()
-            kr.pendulum_block(cases_arr, integrator, rtol, rtol * 1e-2, 0.0, 1000, rows,
-                              status)
-            best = min(best, time.perf_counter() - t)
-        result[name] = n / best
-        result[name + "_flights_per_state"] = float(np.mean(rows[:, pd.ROW_EVENTS]))
-    n_scipy = 20
-    worst, best = 0.0, math.inf
-    for _ in range(3):  # best of three, as for the numba paths
-        t = time.perf_counter()
-        for k, r in zip(ks[:n_scipy], rs[:n_scipy]):
-            v, tau1 = scipy_steady_state(k, r, 1e-8)
-        best = min(best, time.perf_counter() - t)
-    flights = 0
-    for k, r in zip(ks[:n_scipy], rs[:n_scipy]):
-        v, tau1 = scipy_steady_state(k, r, 1e-8)
-        flights += scipy_steady_state.flights
-        pd.dimensionless(0, k, XI, 0.8, r, 1, 0, 0, 0, 1000, out)
-        worst = max(worst, abs(tau1 / out[pd.ROW_INTERVAL] - 1))
-    result["scipy_flights_per_state"] = flights / n_scipy
-    result["scipy_dop853_rtol_1e-8"] = n_scipy / best
-    result["scipy_worst_rel_error_tau1"] = worst
-    result["dopri5_over_scipy"] = result["dopri5_rtol_1e-8"] / result["scipy_dop853_rtol_1e-8"]
-    # the same ratio per integrated flight: what the numba core alone buys, without the
-    # Aitken jump on the impact map (fewer flights per steady state)
-    result["dopri5_over_scipy_per_flight"] = result["dopri5_over_scipy"] * (
-        result["dopri5_rtol_1e-8_flights_per_state"] / result["scipy_flights_per_state"])
-    # the closed form over a whole grid: the per-point cost with omega1 as a free axis
-    m = 10000
-    columns = dict(model=np.zeros(m), k=np.repeat(ks[:100], 100), xi=np.full(m, XI),
-                   kappa=np.full(m, np.nan), R=np.repeat(rs[:100], 100),
-                   omega1=np.tile(np.linspace(20, 100, 100), 100), l2=np.full(m, 0.04),
-                   tool=np.zeros(m), tool_window=np.full(m, 0.2),
-                   rotor_inertia_ratio=np.full(m, 100.0), motor_slope=np.full(m, 100.0),
-                   idle_speed=np.ones(m))
-    params = np.array([columns[name] for name in kr.P._fields])
-    method = kr.DECLARATION.method_record()  # integrator auto: the closed form here
-    kr.run(params, method)
+def scipy_rate(n=20):
+    from kernels import rotary_pendulum as kr
+    params = designs(kr, "paper", "rotor_stop", n, seed=100)
+    decl = kr.DECLARATION
+    ks, rs = params[decl.parameter_index.k], params[decl.parameter_index.R]
     best = math.inf
-    for _ in range(5):
+    for _ in range(3):
         t = time.perf_counter()
-        kr.run(params, method)
+        for k, r in zip(ks, rs):
+            scipy_steady_state(k, r, 1e-8)
         best = min(best, time.perf_counter() - t)
-    result["closed_form_grid_points_per_s_100_omega1_per_case"] = m / best
-    print(f"rotary pendulum, 1 thread, steady states per second: closed form "
-          f"{result['closed_form']:,.0f}; DOPRI5 rtol 1e-8 {result['dopri5_rtol_1e-8']:,.0f}; "
-          f"SciPy DOP853 + events {result['scipy_dop853_rtol_1e-8']:,.1f} "
-          f"(DOPRI5 / SciPy {result['dopri5_over_scipy']:,.0f}x per steady state, "
-          f"{result['dopri5_over_scipy_per_flight']:,.0f}x per flight: "
-          f"{result['dopri5_rtol_1e-8_flights_per_state']:.1f} against "
-          f"{result['scipy_flights_per_state']:.1f} flights); grid points with omega1 "
-          f"rescaled: {result['closed_form_grid_points_per_s_100_omega1_per_case']:,.0f}/s")
-    Path(__file__).resolve().parent.joinpath("results", "rotary_pendulum.json").write_text(
-        json.dumps(result, indent=2))
+    return n / best
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--measure", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--against", metavar="REF", help="a git revision to compare with")
+    parser.add_argument("--rounds", type=int, default=3)
+    args = parser.parse_args()
+    if args.measure:
+        print(json.dumps(measure()))
+        return
+    result = {"machine": platform.node()}
+    if args.against:
+        with tempfile.TemporaryDirectory() as tmp:
+            old = Path(tmp) / "ref"
+            subprocess.run(["git", "-C", str(HERE.parent), "worktree", "add", "--detach",
+                            str(old), args.against], check=True, capture_output=True)
+            try:
+                rounds = {"this": [], args.against: []}
+                for _ in range(args.rounds + 1):  # the first round compiles both: not counted
+                    rounds["this"].append(measure_in(HERE.parent))
+                    rounds[args.against].append(measure_in(old))
+            finally:
+                subprocess.run(["git", "-C", str(HERE.parent), "worktree", "remove", "--force",
+                                str(old)], check=True)
+        best = {who: {key: max(r[key] for r in runs[1:]) for key in runs[0]}
+                for who, runs in rounds.items()}
+        print(f"steady states per second, this tree against {args.against} "
+              f"(best of {args.rounds} rounds in turn):")
+        for key in best["this"]:
+            ratio = best["this"][key] / best[args.against][key]
+            print(f"  {key:24s} {best['this'][key]:10,.1f} {best[args.against][key]:10,.1f}"
+                  f"   ratio {ratio:5.2f}")
+            result[key] = {"this": best["this"][key], args.against: best[args.against][key],
+                           "ratio": ratio}
+    else:
+        rates = measure()
+        result.update(rates)
+        result["scipy_dop853_paper_rtol_1e-8"] = scipy_rate()
+        result["dopri5_over_scipy"] = (rates["paper on rotor_stop"]
+                                       / result["scipy_dop853_paper_rtol_1e-8"])
+        for key, value in result.items():
+            if key != "machine":
+                print(f"  {key:30s} {value:12,.1f}")
+    HERE.joinpath("results", "rotary_pendulum.json").write_text(json.dumps(result, indent=2))
 
 
 if __name__ == "__main__":

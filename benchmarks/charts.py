@@ -37,7 +37,8 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.timing import best_time  # noqa: E402
 from kernels import fourbar as fb  # noqa: E402
-from kernels import pendulum as pd  # noqa: E402
+from kernels import rotary_pendulum as kr  # noqa: E402
+from kernels.pendulum.cases import CASE_COLUMNS, ROW  # noqa: E402
 from kernels.crank_rocker import synthesize_largest_rod  # noqa: E402
 
 MACHINE = f"{platform.node() or 'host'} ({platform.machine()}, 1 thread)"
@@ -56,25 +57,32 @@ def _finish(fig, ax, path: Path, xlabel: str, ylabel: str, title: str) -> None:
 
 def pendulum_work_precision(path: Path):
     k, xi, r = 2.5, 4.0, 0.2
-    out = np.empty(pd.N_ROW)
-    pd.dimensionless(0, k, xi, 0.8, r, pd.INTEGRATOR_CLOSED, 0, 0, 0, 1000, out)
-    rows = [pd.ROW_INTERVAL, pd.ROW_AMPLITUDE, pd.ROW_SPEED]  # pre-impact psi' here
-    ref = out[rows].copy()
+    design = dict(model=0.0, k=k, xi=xi, kappa=0.8, R=r, tool=0.0, tool_window=0.2,
+                  rotor_inertia_ratio=100.0, motor_slope=100.0, idle_speed=1.0)
+    batch = 20  # identical cases per call: the time per steady state without call overhead
+    cases = np.tile([design[c] for c in CASE_COLUMNS], (batch, 1))
+    rows = [ROW.interval, ROW.amplitude, ROW.speed]
 
-    def error(integrator, rtol, dt):
-        pd.dimensionless(0, k, xi, 0.8, r, integrator, rtol, rtol * 1e-2, dt, 1000, out)
-        return float(np.max(np.abs(out[rows] / ref - 1)))
+    def solve(integrator, rtol=1e-10, dt=0.002):
+        method = kr.DECLARATION.method_record(integrator=integrator, rtol=rtol,
+                                              atol=rtol * 1e-2, dt=dt)
+        return kr.solve_cases(cases, method)
+
+    ref = solve("closed_form")[0, rows]
+
+    def error(*args):
+        return float(np.max(np.abs(solve(*args)[0, rows] / ref - 1)))
 
     series = {}
     dts = np.geomspace(0.2, 0.004, 9)
     series["RK4 (dt = 0.2 ... 0.004)"] = [
-        (best_time(lambda d=d: pd.dimensionless(0, k, xi, 0.8, r, 2, 0, 0, d, 1000, out)),
-         error(2, 0.0, d)) for d in dts]
+        (best_time(lambda d=d: solve("rk4", 1e-10, d)) / batch, error("rk4", 1e-10, d))
+        for d in dts]
     rtols = 10.0 ** -np.arange(3, 13.5, 1.0)
     series["DOPRI5 (rtol = 1e-3 ... 1e-13)"] = [
-        (best_time(lambda q=q: pd.dimensionless(0, k, xi, 0.8, r, 3, q, q * 1e-2, 0, 1000, out)),
-         error(3, q, 0.0)) for q in rtols]
-    t_closed = best_time(lambda: pd.dimensionless(0, k, xi, 0.8, r, 1, 0, 0, 0, 1000, out))
+        (best_time(lambda q=q: solve("dopri5", q)) / batch, error("dopri5", q))
+        for q in rtols]
+    t_closed = best_time(lambda: solve("closed_form")) / batch
     rk4_err = np.array([e for _, e in series["RK4 (dt = 0.2 ... 0.004)"]])
     usable = rk4_err > 1e-13
     order = np.polyfit(np.log(dts[usable]), np.log(rk4_err[usable]), 1)[0]
@@ -256,9 +264,9 @@ def separatrix_failure_map(path: Path):
     from benchmarks import failure_maps as fm
 
     deltas = np.geomspace(1e-13, 1e-1, 25)
-    axes_spec = (("DOPRI5", pd.METHOD_DOPRI5, np.geomspace(1e-12, 1e-3, 19),
+    axes_spec = (("DOPRI5", "dopri5", np.geomspace(1e-12, 1e-3, 19),
                   "rtol (atol = rtol/100)", lambda a: a, "delta = rtol"),
-                 ("RK4", pd.METHOD_RK4, np.geomspace(3e-3, 0.5, 15),
+                 ("RK4", "rk4", np.geomspace(3e-3, 0.5, 15),
                   "step [rotor rad]", lambda a: a**4 / 100, "delta = step^4/100 (fitted)"))
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), constrained_layout=True, sharey=True)
     for ax, (name, method, accuracies, label, guide, guide_label) in zip(axes, axes_spec):

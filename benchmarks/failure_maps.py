@@ -21,7 +21,8 @@ import math
 import numpy as np
 from scipy.special import ellipj, ellipk
 
-from kernels import pendulum as pd
+from kernels.impact.outcomes import FLIGHT_EVENT
+from tests import probes
 
 APEX = 1.0  # rad
 
@@ -51,26 +52,30 @@ def naive_found(step: float, speed: float, phase: float) -> bool:
 
 def detector_found(step: float, speed: float, phase: float) -> bool:
     """The kernel's event detection (RK4 with the given step, sub-step sign samples and the
-    extremum check), started from the exact state at phase * step: a contact before the
-    pendulum is back at 0?"""
+    extremum check), started from the exact state at phase * step against a stop at the
+    level (the test-defined stop of tests/stop_tool.py): a contact before the pendulum is
+    back at 0?"""
     level = approach_level(speed)
     psi0, dpsi0 = exact_state(phase * step)
     half = 2 * ellipk(math.sin(APEX / 2) ** 2)
     steps = int(math.ceil((half - phase * step) / step)) + 1
-    status = pd._flight(pd.MODEL_RIGID, psi0, dpsi0, level, 1.0, 4.0, 1.0, pd.METHOD_RK4,
-                        0.0, 0.0, step, steps, False)[0]
-    return status == pd.FLIGHT_IMPACT
+    fl = probes.flight("rigid", "relative_stop")(
+        phase * step, (psi0, dpsi0), (1.0, 1.0), (level,),
+        probes.settings("rk4", dt=step, max_steps=steps), False)
+    return fl.outcome == FLIGHT_EVENT and fl.event == 0
 
 
-def separatrix_correct(method: int, accuracy: float, delta: float) -> int:
+def separatrix_correct(method: str, accuracy: float, delta: float) -> int:
     """How many of the two launches 2 (1 -+ delta) an integrator alone classifies right
     (return / escape); accuracy is rtol (DOPRI5, atol = rtol/100) or the step (RK4)."""
     right = 0
+    fly = probes.flight("rigid", "rotor_stop")
     for sign in (-1.0, 1.0):
-        rtol = accuracy if method == pd.METHOD_DOPRI5 else 0.0
-        status = pd.integrate_flight(pd.MODEL_RIGID, 2.0 * (1.0 + sign * delta), 1.0, 4.0,
-                                     1.0, method, rtol, rtol * 1e-2, accuracy, 10**7,
-                                     False)[0]
-        escaped = status == pd.FLIGHT_ESCAPE
+        rtol = accuracy if method == "dopri5" else 1e-3
+        settings = probes.settings(method, rtol=rtol, atol=rtol * 1e-2, dt=accuracy,
+                                   max_steps=10**7, horizon=1e4)
+        fl = fly(0.0, (0.0, -2.0 * (1.0 + sign * delta)), (1.0, 1.0), (0.0, 1.0), settings,
+                 False)
+        escaped = fl.outcome == FLIGHT_EVENT and fl.event == 1
         right += escaped == (sign > 0)
     return right

@@ -5,37 +5,20 @@ This package must not import xarray, dask, scipy, pint, netCDF4, matplotlib or a
 write a status code (``kernels.status``) and NaN outputs.
 """
 
-#: compile options of every kernel. error_model="numpy": a float division by zero gives
-#: inf/NaN (then a status code) instead of raising ZeroDivisionError, and costs no check.
-#: No fastmath: results must be bit-identical whatever the block length.
+#: compile options of a kernel called from Python. error_model="numpy": a float division
+#: by zero gives inf/NaN (then a status code) instead of raising ZeroDivisionError, and
+#: costs no check. No fastmath: results must be bit-identical whatever the block length.
 KERNEL_OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
+#: functions called only from other kernels: no Python wrapper is generated for them (it
+#: cost a fifth of the pendulum's compile time), and no cache file of their own (their code
+#: is in the cache of the kernel that calls them); call them from Python through a kernel
+INNER_OPTIONS = dict(KERNEL_OPTIONS, no_cpython_wrapper=True, cache=False)
+#: one-line accessors and event functions: inlined into their callers by numba, so that
+#: they are not compiled, linked and finalised as functions of their own (half the
+#: pendulum's compile units)
+INLINE_OPTIONS = dict(INNER_OPTIONS, inline="always")
 
 
-def _use_source_keyed_cache() -> None:
-    """Point numba's on-disk cache at a directory named by a hash of every kernel source.
+from kernels import cache  # noqa: E402  (the cache locator, before any kernel is made)
 
-    numba checks only the decorated function's own file before reusing cached machine code,
-    so a kernel that calls into a changed module would silently run the old callee. A new
-    source hash means a fresh cache; stale siblings are pruned. Must run before any kernel
-    module is imported (the cache locator is fixed at decoration time).
-    """
-    import hashlib
-    import os
-    import shutil
-    from pathlib import Path
-
-    import numba
-
-    here = Path(__file__).parent
-    digest = hashlib.sha256()
-    for path in sorted(here.glob("*.py")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes())
-    base = Path(os.environ.get("NUMBA_CACHE_DIR") or here / "__pycache__")
-    target = base / f"numba-{digest.hexdigest()[:16]}"
-    if not target.exists():
-        for old in base.glob("numba-*"):
-            shutil.rmtree(old, ignore_errors=True)
-    numba.config.CACHE_DIR = str(target)
-
-
-_use_source_keyed_cache()
+cache.install()

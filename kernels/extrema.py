@@ -22,7 +22,7 @@ import math
 import numpy as np
 from numba import njit
 
-from kernels import KERNEL_OPTIONS
+from kernels import KERNEL_OPTIONS, INNER_OPTIONS
 
 _GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 #: points approaching each end of a piece, by default: down to 2^-CLUSTER of the spacing
@@ -92,7 +92,7 @@ def peak_search(f):
     to cache the caller (tests/test_extrema.py).
     """
 
-    @njit(**KERNEL_OPTIONS)
+    @njit(**INNER_OPTIONS)
     def golden_max(data, a, b, stop):
         c, d = golden_points(a, b)
         fc, fd = _value(f(c, data)), _value(f(d, data))
@@ -104,7 +104,7 @@ def peak_search(f):
                 fd = _value(f(d, data))
         return max(fc, fd)
 
-    @njit(**KERNEL_OPTIONS)
+    @njit(**INNER_OPTIONS)
     def refine_sampled_max(data, xs, values, stop):
         best = -math.inf
         for j in range(xs.shape[0]):

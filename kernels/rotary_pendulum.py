@@ -1,27 +1,39 @@
-"""The rotary-pendulum mechanism kernel (atlas.md §3.4): one steady state per distinct case
-(model, k, xi, kappa, R, tool, tool window, rotor parameters) of a block, then rescaled by
-omega1 and l2 (omega1 is only a time scale, P-O12)."""
+"""The rotary-pendulum impact mechanism (seed 004): its declaration and entry point.
+
+One steady state per distinct case (model, k, xi, kappa, R, tool, tool window, rotor
+parameters) of a block, then rescaled by omega1 and l2 (omega1 is only a time scale, P-O12).
+A case is solved in closed form where its model has one (the paper and rigid models on the
+rotor stop: kernels/pendulum/models.py), else by the integration core (kernels/impact) on its
+system (kernels/pendulum/systems.py), compiled only for the systems a block has.
+"""
 
 import math
-from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels import pendulum as pd
 from kernels.declaration import POSITIVE, Mechanism, Output, Quantity
-from kernels.pendulum import (ROW_ACCEL, ROW_AMPLITUDE, ROW_EVENTS, ROW_FREQUENCY,
-                              ROW_IMPACTS, ROW_INTERVAL, ROW_METHOD, ROW_RCRIT, ROW_REGIME,
-                              ROW_REJECTED, ROW_ROTOR_SPEED, ROW_SPEED, ROW_STEPS)
-from kernels.pendulum_lab import lab_steady
-from kernels.pendulum_rotor import METHOD_DOPRI5, METHOD_RK4, rotor_steady
-from kernels.pendulum_rotor_lab import rotor_lab_steady
+from kernels.impact.outcomes import (SEQUENCE_CYCLE, SEQUENCE_DEGENERATE, SEQUENCE_ESCAPE,
+                                     SEQUENCE_MAX_STEPS, SEQUENCE_NO_IMPACT,
+                                     SEQUENCE_NONFINITE, SEQUENCE_NOT_PERIODIC,
+                                     SEQUENCE_SEPARATRIX, SEQUENCE_UNDERFLOW)
+from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_RK4
+from kernels.pendulum.cases import CASE_COLUMNS, N_ROW, ROW, C
+from kernels.pendulum.models import (MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR, closed_flight,
+                                     impacts_to_converge, paper_critical, rigid_critical,
+                                     steady_state_speed)
 
-MODEL_PAPER, MODEL_RIGID = pd.MODEL_PAPER, pd.MODEL_RIGID
-MODEL_ROTOR = 2
 TOOL_ROTOR_STOP, TOOL_LAB_WINDOW = 0, 1
-USED_CLOSED, USED_RK4, USED_DOPRI5 = pd.USED_CLOSED, pd.USED_RK4, pd.USED_DOPRI5
+INTEGRATOR_AUTO, INTEGRATOR_CLOSED, INTEGRATOR_RK4, INTEGRATOR_DOPRI5 = 0, 1, 2, 3
+USED_CLOSED, USED_RK4, USED_DOPRI5 = 0, 1, 2
+#: meanings of the codes of the ``regime`` output (CF flag_meanings, in this order)
+REGIMES = ("period_1", "period_n", "quasi_periodic", "escape", "chatter", "no_impact",
+           "separatrix")
+R_ = {name: code for code, name in enumerate(REGIMES)}
+#: a launch speed within this (relative) of the escape threshold is on the separatrix: the
+#: flight's time diverges like its logarithm, beyond what any method resolves (H1, H2)
+SEPARATRIX = 64 * 2.220446049250313e-16
 _ROTOR = {"model": ("rotor",)}
 
 
@@ -89,7 +101,7 @@ DECLARATION = Mechanism(
     ),
     outputs=(
         Output("regime", "1", "steady regime of the impact motion",
-               flags={name: code for code, name in enumerate(pd.REGIMES)}
+               flags={name: code for code, name in enumerate(REGIMES)}
                | {"undetermined": -1}, undetermined="undetermined"),
         Output("amplitude", "rad", "amplitude of the relative swing (A)", "A"),
         Output("frequency_ratio", "1", "frequency coefficient n (psi ~ A sin(n omega1 t)), "
@@ -117,14 +129,15 @@ DECLARATION = Mechanism(
         Output("method_used", "1", "method that produced the values",
                flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5}),
     ),
-    status=("ok", "escape", "max_steps", "step_underflow", "degenerate", "nonfinite"),
+    status=("ok", "escape", "no_impact", "not_periodic", "separatrix", "max_steps",
+            "step_underflow", "degenerate", "nonfinite"),
     usable=("escape",),
     method=(
         Quantity("integrator", "1", "auto (the closed form where the model has one, else "
                  "DOPRI5 at a tolerance calibrated for tol), closed_form, rk4 or dopri5",
                  default="auto",
-                 choices={"auto": pd.INTEGRATOR_AUTO, "closed_form": pd.INTEGRATOR_CLOSED,
-                          "rk4": pd.INTEGRATOR_RK4, "dopri5": pd.INTEGRATOR_DOPRI5}),
+                 choices={"auto": INTEGRATOR_AUTO, "closed_form": INTEGRATOR_CLOSED,
+                          "rk4": INTEGRATOR_RK4, "dopri5": INTEGRATOR_DOPRI5}),
         Quantity("rtol", "1", "dopri5 relative tolerance", default=1e-10, minimum=1e-14,
                  maximum=1e-2, used_when={"integrator": ("dopri5",)}),
         Quantity("atol", "1", "dopri5 absolute tolerance (rad, rad per rotor radian)",
@@ -153,11 +166,6 @@ S = DECLARATION.status_codes
 #: accuracy measured. Factors by log10(tol), linear in between.
 AUTO_RTOL_FACTOR = ((-3.0, 0.01), (-4.0, 0.08), (-5.0, 0.1), (-6.0, 0.2), (-8.0, 0.3))
 AUTO_ATOL_PER_RTOL = 1.0
-LAB_HORIZON = 200.0 * math.pi  # rotor radians without a contact: regime no_impact
-N_ROW = pd.N_ROW
-_REGIME_CODES = np.arange(len(pd.REGIMES), dtype=np.float64)  # unused by the drivers
-#: the status of each return code of the steady-state drivers
-_STATUS = (S.ok, S.escape, S.max_steps, S.step_underflow, S.degenerate)
 
 
 def auto_rtol(tol):
@@ -166,62 +174,55 @@ def auto_rtol(tol):
     return tol * float(np.interp(math.log10(tol), x[::-1], f[::-1]))
 
 
-#: the columns of a case: what a steady state depends on (omega1 and l2 only rescale it)
-CASE_COLUMNS = ("model", "k", "xi", "kappa", "R", "tool", "tool_window",
-                "rotor_inertia_ratio", "motor_slope", "idle_speed")
-C = namedtuple("CaseColumns", CASE_COLUMNS)(*range(len(CASE_COLUMNS)))
+@njit(**KERNEL_OPTIONS)
+def driven_stop_preamble(case, tol, row):
+    """What the closed form says of a driven case on the rotor stop, before any flight:
+    R_crit, the impacts the affine map needs from rest to tol (or to escape), and the
+    steady launch speed v*. Returns (v*, v_crit, escapes, on the separatrix)."""
+    model, k, r = int(case[C.model]), case[C.k], case[C.R]
+    p = (k, case[C.xi]) if model == MODEL_PAPER else (k, case[C.kappa])
+    v_crit = paper_critical(p) if model == MODEL_PAPER else rigid_critical(p)
+    r_crit = (v_crit - (1.0 + k)) / (v_crit + (1.0 + k))
+    row[ROW.restitution_critical] = r_crit if r_crit > 0.0 else math.nan
+    count, escapes = impacts_to_converge(k, r, v_crit, tol)
+    row[ROW.impacts] = count
+    v = steady_state_speed(k, r)
+    return v, v_crit, escapes, abs(v - v_crit) <= SEPARATRIX * v_crit
 
 
 @njit(**KERNEL_OPTIONS)
-def steady_case(case, integrator, rtol, atol, dt, max_impacts, row):
-    """Steady state of one case (columns C) in omega1 units into row (slots ROW_*);
-    returns the kernel status code."""
-    for j in range(row.shape[0]):
-        row[j] = math.nan
-    model, k, xi, kappa, r = int(case[C.model]), case[C.k], case[C.xi], case[C.kappa], case[C.R]
-    tool, window = int(case[C.tool]), case[C.tool_window]
-    j1, slope, idle = case[C.rotor_inertia_ratio], case[C.motor_slope], case[C.idle_speed]
-    if model != MODEL_ROTOR and tool == TOOL_ROTOR_STOP:
-        code = pd.steady_state(model, k, xi, kappa, r, integrator, rtol, atol, dt,
-                               max_impacts, row)
-        row[ROW_SPEED] = 1.0 + k + row[ROW_SPEED]  # pre-impact psi' -> striker normal speed
-        row[ROW_ROTOR_SPEED] = 1.0
-        return code
-    method = METHOD_RK4 if integrator == pd.INTEGRATOR_RK4 else METHOD_DOPRI5
-    row[ROW_METHOD] = pd.USED_RK4 if method == METHOD_RK4 else pd.USED_DOPRI5
-    if model == MODEL_ROTOR and tool == TOOL_LAB_WINDOW:
-        log = np.empty((1, 2))
-        code = rotor_lab_steady(k, xi, kappa, r, window, j1, slope, idle, method, rtol, atol,
-                                dt, int(max_impacts), LAB_HORIZON, _REGIME_CODES, row, log)
-    elif model == MODEL_ROTOR:
-        code = rotor_steady(k, xi, kappa, r, j1, slope, idle, method, rtol, atol, dt,
-                            int(max_impacts), _REGIME_CODES, row)
-    else:
-        log = np.empty((1, 2))
-        code = lab_steady(model, k, xi, kappa, r, window, method, rtol, atol, dt,
-                          int(max_impacts), LAB_HORIZON, _REGIME_CODES, row, log)
-    return _STATUS[code]
-
-
-@njit(**KERNEL_OPTIONS)
-def pendulum_block(cases, integrator, rtol, atol, dt, max_impacts, rows, status):
-    row = np.empty(N_ROW)
+def closed_form_block(cases, rows):
+    """Driven cases on the rotor stop in closed form: the affine impact map's fixed point
+    v* (P-O6) and the flight from it (first integral, amplitude by Newton, half period by
+    Gauss-Legendre; the rigid pendulum by the AGM elliptic integral)."""
     for c in range(cases.shape[0]):
-        status[c] = steady_case(cases[c], integrator, rtol, atol, dt, max_impacts, row)
-        for j in range(N_ROW):
-            rows[c, j] = row[j]
+        case, row = cases[c], rows[c]
+        for j in range(row.shape[0]):
+            row[j] = math.nan
+        row[ROW.steps] = row[ROW.rejected] = row[ROW.events] = 0.0
+        v, v_crit, escapes, separatrix = driven_stop_preamble(case, 1e-12, row)
+        if escapes or separatrix:
+            row[ROW.outcome] = SEQUENCE_SEPARATRIX if separatrix else SEQUENCE_ESCAPE
+            continue
+        model, k = int(case[C.model]), case[C.k]
+        p = (k, case[C.xi]) if model == MODEL_PAPER else (k, case[C.kappa])
+        amplitude, tau1, peak = closed_flight(model, v, p)
+        row[ROW.outcome] = SEQUENCE_CYCLE
+        row[ROW.period], row[ROW.chatter] = 1.0, 0.0
+        row[ROW.amplitude], row[ROW.frequency] = amplitude, math.pi / tau1
+        row[ROW.interval], row[ROW.speed] = tau1, 1.0 + k + v
+        row[ROW.acceleration], row[ROW.rotor_speed] = peak, 1.0
 
 
 @njit(**KERNEL_OPTIONS)
-def row_hashes(keys):
-    """A 64-bit hash of each row's bit patterns (FNV-1a over the words, splitmix64 finish);
-    -0.0 counts as 0.0."""
-    out = np.empty(keys.shape[0], dtype=np.uint64)
-    for i in range(keys.shape[0]):
+def row_hashes(words):
+    """A 64-bit hash of each row of a uint64 matrix (FNV-1a over the words, splitmix64
+    finish)."""
+    out = np.empty(words.shape[0], dtype=np.uint64)
+    for i in range(words.shape[0]):
         h = np.uint64(14695981039346656037)
-        for j in range(keys.shape[1]):
-            word = np.array([keys[i, j] + 0.0]).view(np.uint64)[0]
-            h = (h ^ word) * np.uint64(1099511628211)
+        for j in range(words.shape[1]):
+            h = (h ^ words[i, j]) * np.uint64(1099511628211)
         h ^= h >> np.uint64(30)
         h *= np.uint64(0xBF58476D1CE4E5B9)
         h ^= h >> np.uint64(27)
@@ -232,10 +233,12 @@ def row_hashes(keys):
 
 
 def distinct_rows(keys):
-    """(distinct rows, index of each row's distinct row): a 1-D unique on row hashes, checked
-    row by row (np.unique(axis=0) sorts structured rows and cost 85 % of a closed-form
-    block); a hash collision falls back to the exact sort."""
-    _, first, inverse = np.unique(row_hashes(keys), return_index=True, return_inverse=True)
+    """(distinct rows, index of each row's distinct row): a 1-D unique on row hashes of the
+    bit patterns (-0.0 counts as 0.0), checked row by row (np.unique(axis=0) sorts
+    structured rows and cost 85 % of a closed-form block); a hash collision falls back to
+    the exact sort."""
+    words = np.ascontiguousarray(keys + 0.0).view(np.uint64)
+    _, first, inverse = np.unique(row_hashes(words), return_index=True, return_inverse=True)
     cases = keys[first]
     same = (cases[inverse] == keys) | (np.isnan(cases[inverse]) & np.isnan(keys))
     if not same.all():
@@ -243,49 +246,97 @@ def distinct_rows(keys):
     return cases, inverse.ravel()
 
 
+def solve_cases(cases, method):
+    """The result row (cases.ROW) of every case, in omega1 units: closed form where the
+    model has one and the method allows it, else the integration core on the case's
+    system (imported, and compiled, only when a block has a case of it)."""
+    rows = np.empty((cases.shape[0], N_ROW))
+    model, tool = cases[:, C.model], cases[:, C.tool]
+    driven_stop = (model != MODEL_ROTOR) & (tool == TOOL_ROTOR_STOP)
+    closed = driven_stop & (method.integrator <= INTEGRATOR_CLOSED)
+    if closed.any():
+        rows_closed = np.empty((int(closed.sum()), N_ROW))
+        closed_form_block(np.ascontiguousarray(cases[closed]), rows_closed)
+        rows_closed[:, ROW.method] = USED_CLOSED
+        rows[closed] = rows_closed
+    integrated = ~closed
+    if integrated.any():
+        from kernels.pendulum.systems import SYSTEMS
+
+        rk4 = method.integrator == INTEGRATOR_RK4
+        rtol, atol = method.rtol, method.atol
+        if method.integrator == INTEGRATOR_AUTO:  # no closed form: DOPRI5 calibrated for tol
+            rtol = auto_rtol(method.tol)
+            atol = rtol * AUTO_ATOL_PER_RTOL
+        for (m, t), block in SYSTEMS.items():
+            chosen = integrated & (model == m) & (tool == t)
+            if not chosen.any():
+                continue
+            sub = np.ascontiguousarray(cases[chosen])
+            out = np.empty((sub.shape[0], N_ROW))
+            block(sub, METHOD_RK4 if rk4 else METHOD_DOPRI5, rtol, atol, method.dt,
+                  method.max_impacts, out, np.empty((1, 2)))
+            out[:, ROW.method] = USED_RK4 if rk4 else USED_DOPRI5
+            if t == TOOL_ROTOR_STOP and m != MODEL_ROTOR:
+                tol = 1e-9 if rk4 else max(10.0 * rtol, 1e-12)
+                for j in range(sub.shape[0]):
+                    v, v_crit, escapes, separatrix = driven_stop_preamble(sub[j], tol, out[j])
+                    if separatrix:
+                        out[j, ROW.outcome] = SEQUENCE_SEPARATRIX
+            rows[chosen] = out
+    return rows
+
+
+#: the status and regime of each way a sequence ends (kernels/impact/outcomes.py)
+_OUTCOMES = {SEQUENCE_CYCLE: (S.ok, -1), SEQUENCE_ESCAPE: (S.escape, R_["escape"]),
+             SEQUENCE_NO_IMPACT: (S.no_impact, R_["no_impact"]),
+             SEQUENCE_NOT_PERIODIC: (S.not_periodic, R_["quasi_periodic"]),
+             SEQUENCE_MAX_STEPS: (S.max_steps, -1),
+             SEQUENCE_UNDERFLOW: (S.step_underflow, -1),
+             SEQUENCE_DEGENERATE: (S.degenerate, -1),
+             SEQUENCE_SEPARATRIX: (S.separatrix, R_["separatrix"]),
+             SEQUENCE_NONFINITE: (S.nonfinite, -1)}
+_STATUS_OF = np.array([_OUTCOMES[k][0] for k in range(len(_OUTCOMES))], np.int8)
+_REGIME_OF = np.array([_OUTCOMES[k][1] for k in range(len(_OUTCOMES))], np.float64)
+
+
 def run(params, method):
     """Entry point: solve once per distinct case in the block, then rescale by omega1 and
     l2. Parameters a case does not use are blanked, so they do not split it."""
     p = {name: params[i] for name, i in P._asdict().items()}
-    model, tool = p["model"], p["tool"]
     p["kappa"] = np.where(np.isnan(p["kappa"]), p["xi"] / (1.0 + p["xi"]), p["kappa"])
-    rotor = model == MODEL_ROTOR
-    lab = tool == TOOL_LAB_WINDOW
+    rotor = p["model"] == MODEL_ROTOR
+    lab = p["tool"] == TOOL_LAB_WINDOW
     used = {"tool_window": lab, "rotor_inertia_ratio": rotor, "motor_slope": rotor,
             "idle_speed": rotor}
     keys = np.stack([np.where(used[name], p[name], 0.0) if name in used else p[name]
                      for name in CASE_COLUMNS], axis=1)
     cases, index = distinct_rows(keys)
-    rows = np.empty((cases.shape[0], N_ROW))
-    case_status = np.empty(cases.shape[0], dtype=np.int8)
-    integrator, rtol, atol = method.integrator, method.rtol, method.atol
-    if integrator == pd.INTEGRATOR_AUTO:  # closed form where it exists, else this DOPRI5
-        rtol = auto_rtol(method.tol)
-        atol = rtol * AUTO_ATOL_PER_RTOL
-    pendulum_block(np.ascontiguousarray(cases), integrator, rtol, atol, method.dt,
-                   method.max_impacts, rows, case_status)
-    d = rows[index].T
+    d = solve_cases(cases, method)[index].T
+    outcome = d[ROW.outcome].astype(np.int64)
+    status = _STATUS_OF[outcome]
+    cycle = outcome == SEQUENCE_CYCLE
+    regime = np.where(cycle, np.where(d[ROW.chatter] > 0, R_["chatter"],
+                                      np.where(d[ROW.period] == 1, R_["period_1"],
+                                               R_["period_n"])), _REGIME_OF[outcome])
     w, l2 = p["omega1"], p["l2"]
     out = np.empty((len(O), params.shape[1]))
-    out[O.regime] = d[ROW_REGIME]
-    out[O.amplitude] = d[ROW_AMPLITUDE]
-    out[O.frequency_ratio] = d[ROW_FREQUENCY]
+    out[O.regime] = np.where(regime >= 0, regime, np.nan)
+    out[O.amplitude] = d[ROW.amplitude]
+    out[O.frequency_ratio] = d[ROW.frequency]
     # the full relative oscillation period (Table 1's T)
-    out[O.period] = 2.0 * np.pi / (d[ROW_FREQUENCY] * w)
-    out[O.impact_speed] = w * l2 * d[ROW_SPEED]
-    out[O.impact_interval] = d[ROW_INTERVAL]
-    out[O.impacts_to_converge] = d[ROW_IMPACTS]
-    out[O.acceleration_peak] = d[ROW_ACCEL] * w * w
-    out[O.restitution_critical] = d[ROW_RCRIT]
-    out[O.rotor_speed_ratio] = d[ROW_ROTOR_SPEED]
-    out[O.n_steps] = d[ROW_STEPS]
-    out[O.n_rejected] = d[ROW_REJECTED]
-    out[O.n_events] = d[ROW_EVENTS]
-    out[O.method_used] = d[ROW_METHOD]
-    status = case_status[index]
+    out[O.period] = 2.0 * np.pi / (d[ROW.frequency] * w)
+    out[O.impact_speed] = w * l2 * d[ROW.speed]
+    out[O.impact_interval] = d[ROW.interval]
+    out[O.impacts_to_converge] = d[ROW.impacts]
+    out[O.acceleration_peak] = d[ROW.acceleration] * w * w
+    out[O.restitution_critical] = d[ROW.restitution_critical]
+    out[O.rotor_speed_ratio] = d[ROW.rotor_speed]
+    out[O.n_steps] = d[ROW.steps]
+    out[O.n_rejected] = d[ROW.rejected]
+    out[O.n_events] = d[ROW.events]
+    out[O.method_used] = d[ROW.method]
     # a steady cycle whose values did not come out finite is not a design value
-    cycle = np.isin(out[O.regime], (pd.REGIME_PERIOD_1, pd.REGIME_PERIOD_N,
-                                    pd.REGIME_CHATTER))
     values = out[[O.amplitude, O.impact_speed, O.impact_interval, O.acceleration_peak]]
-    status[(status == S.ok) & cycle & ~np.all(np.isfinite(values), axis=0)] = S.nonfinite
+    status[cycle & ~np.all(np.isfinite(values), axis=0)] = S.nonfinite
     return out, status, np.empty((0, params.shape[1], 0))

@@ -24,6 +24,8 @@ CODES = {
     "no_impact": 14,  # gamma <= 1, or the striker never reaches the tool
     "second_special_position": 15,  # a second change point on the turn
     "no_special_position": 16,  # a general four-bar that is not a change-point linkage
+    "not_periodic": 17,  # the impact sequence did not settle into a cycle (quasi-periodic)
+    "separatrix": 18,  # the steady impact speed is the escape threshold: no period exists
 }
 #: the meaning of each code
 MEANINGS = {code: name for name, code in CODES.items()}

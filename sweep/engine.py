@@ -9,6 +9,7 @@ bit-identical whatever the chunk size or thread count.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -42,6 +43,28 @@ def normalize_chunks(chunk_shape: tuple[int, ...], shape: tuple[int, ...]) -> tu
     """Block lengths along each axis: whole chunks, then the remainder."""
     return tuple(tuple([c] * (n // c) + ([n % c] if n % c else [])) for c, n in
                  zip(chunk_shape, shape))
+
+
+def sample_parameters(sweep: Sweep) -> np.ndarray:
+    """A few points that take every code path of a sweep: each combination of the values of
+    its categorical axes (model, tool, type ...), the other axes at their first value. Run
+    once before the blocks, it compiles what the sweep needs, and only that."""
+    axis_of = {axis.name: axis for axis in sweep.axes}
+    values = []
+    for p in sweep.mechanism.parameters:
+        axis = axis_of.get(p.name)
+        if axis is None:
+            values.append([sweep.fixed[p.name]])
+        elif p.choices is not None:
+            values.append(list(dict.fromkeys(axis.codes.tolist())))
+        else:
+            values.append([axis.codes[0]])
+    return np.array(list(itertools.product(*values)), dtype=float).T
+
+
+def warm_up(sweep: Sweep) -> None:
+    """Run the kernel on the sample points (compiling it on a first run)."""
+    sweep.kernel(sample_parameters(sweep), sweep.method_record)
 
 
 def block_parameters(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import os
 import sys
+import time
 from pathlib import Path
 
 from sweep import engine
@@ -41,6 +42,8 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
     plan = engine.Plan(sweep)
     store = BlockStore(sweep, plan, Path(path), resume, force)
     todo = [(index, loc) for index, loc in plan.locations() if not store.has(index)]
+    if todo and not sweep.run.scheduler:
+        _compile_first(sweep, announce=progress)
     bar = tqdm(total=plan.n_blocks, initial=len(store.done), unit="block", delay=1.5,
                disable=not progress, file=sys.stderr, desc="sweep")
 
@@ -58,6 +61,29 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
     write_atlas(store, plan, Path(path), history or history_line())
     store.discard()
     return {"blocks": plan.n_blocks, "reused": len(store.done)}
+
+
+COMPILE_NOTICE_AFTER = 0.5  # s: a warm run takes less; numba's first compile far more
+
+
+def _compile_first(sweep, announce: bool) -> None:
+    """Compile the kernels the sweep needs (engine.warm_up) before the blocks start, and
+    say so when it takes long: numba compiles on a first run (tens of seconds for the
+    pendulum's integration core), and the cache makes later runs start at once. Without
+    this the progress bar would sit at 0 for that time."""
+    started = time.perf_counter()
+    with cf.ThreadPoolExecutor(max_workers=1) as pool:
+        compiling = pool.submit(engine.warm_up, sweep)
+        try:
+            compiling.result(timeout=COMPILE_NOTICE_AFTER)
+            return
+        except cf.TimeoutError:
+            if announce:
+                print("compiling kernels (first run only) ...", file=sys.stderr, flush=True)
+        compiling.result()
+    if announce:
+        print(f"compiled in {time.perf_counter() - started:.0f} s", file=sys.stderr,
+              flush=True)
 
 
 def _compute_local(sweep, todo, save, workers: int) -> None:

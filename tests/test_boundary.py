@@ -32,7 +32,8 @@ def test_kernels_source_imports_nothing_forbidden():
 
 
 def test_importing_kernels_loads_no_forbidden_module():
-    names = [f"kernels.{f.stem}" for f in sorted(KERNELS.glob("*.py")) if f.stem != "__init__"]
+    names = [".".join(f.relative_to(KERNELS.parent).with_suffix("").parts)
+             for f in sorted(KERNELS.rglob("*.py")) if f.stem != "__init__"]
     # numba itself imports scipy when it is installed: compare with numba alone
     code = ("import importlib, json, sys\n"
             "import numba, numpy\n"
@@ -52,17 +53,49 @@ def test_boundary_check_catches_a_violation(tmp_path):
     assert ("scipy", 2) in list(_imported_roots(bad))
 
 
-def test_numba_cache_is_keyed_on_every_kernel_source():
+def test_numba_cache_is_keyed_by_each_modules_import_closure(tmp_path):
     """numba reuses cached code after checking only the decorated function's own file; a
-    kernel calling into a changed module ran stale code until the cache directory was named
-    by a hash of all kernel sources."""
-    import hashlib
+    kernel calling into a changed module ran stale code. The stamp of a kernel's cache is a
+    hash of its import closure: an edit to the integration core restamps every pendulum
+    system, an edit to the balancer restamps nothing of the pendulum."""
+    import shutil
 
     import numba
 
-    import kernels
-    here = Path(kernels.__file__).parent
-    digest = hashlib.sha256()
-    for path in sorted(here.glob("*.py")):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes())
-    assert numba.config.CACHE_DIR.endswith("numba-" + digest.hexdigest()[:16])
+    from kernels import cache
+    from kernels import rotary_pendulum as kr
+    from kernels.pendulum import systems
+
+    closure = cache.import_closure(KERNELS / "rotary_pendulum.py")
+    names = {str(p.relative_to(KERNELS.parent)) for p in closure}
+    # the lazily imported systems and, through them, the whole core are in it
+    assert {"kernels/pendulum/systems.py", "kernels/impact/events.py",
+            "kernels/impact/flight.py", "kernels/extrema.py", "kernels/__init__.py"} <= names
+    assert "kernels/balancer.py" not in names and "kernels/crank_rocker.py" not in names
+    # an edit changes exactly the stamps of the modules that import the edited one
+    copy = tmp_path / "kernels"
+    shutil.copytree(KERNELS, copy, ignore=shutil.ignore_patterns("__pycache__"))
+
+    def stamps():
+        cache.stamp.cache_clear()
+        return {name: cache.stamp(str(copy / name), tmp_path)
+                for name in ("rotary_pendulum.py", "pendulum/systems.py", "balancer.py")}
+    before = stamps()
+    with open(copy / "balancer.py", "a") as f:
+        f.write("\n# an edit\n")
+    after_balancer = stamps()
+    with open(copy / "impact" / "events.py", "a") as f:
+        f.write("\n# an edit\n")
+    after_core = stamps()
+    cache.stamp.cache_clear()
+    assert after_balancer["balancer.py"] != before["balancer.py"]
+    assert after_balancer["rotary_pendulum.py"] == before["rotary_pendulum.py"]
+    assert after_core["rotary_pendulum.py"] != after_balancer["rotary_pendulum.py"]
+    assert after_core["pendulum/systems.py"] != after_balancer["pendulum/systems.py"]
+    assert after_core["balancer.py"] == after_balancer["balancer.py"]
+    # and numba uses it for every cached kernel
+    for kernel in (systems.rigid_on_blade, kr.row_hashes):
+        locator = kernel._cache._impl._locator
+        assert isinstance(locator, cache.ImportClosureLocator)
+        assert locator.get_source_stamp() == cache.stamp(kernel.py_func.__code__.co_filename)
+    assert numba.config.CACHE_DIR

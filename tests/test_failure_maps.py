@@ -8,10 +8,7 @@ import numpy as np
 import pytest
 
 from benchmarks import failure_maps as fm
-from kernels import pendulum as pd
-from kernels import rotary_pendulum as kr
-
-ST = kr.S  # status codes
+from tests.conftest import kernel_point
 
 PHASES = np.arange(16) / 16
 
@@ -52,24 +49,25 @@ def test_kernel_detector_misses_only_below_the_interpolation_error(step):
 
 @pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8])
 def test_dopri5_alone_classifies_escape_right_only_above_rtol(rtol):
-    assert fm.separatrix_correct(pd.METHOD_DOPRI5, rtol, 10 * rtol) == 2
-    assert fm.separatrix_correct(pd.METHOD_DOPRI5, rtol, rtol / 1000) < 2
+    assert fm.separatrix_correct("dopri5", rtol, 10 * rtol) == 2
+    assert fm.separatrix_correct("dopri5", rtol, rtol / 1000) < 2
 
 
 @pytest.mark.parametrize("step", [0.3, 0.1, 0.03])
 def test_rk4_alone_classifies_escape_right_only_above_step4(step):
-    assert fm.separatrix_correct(pd.METHOD_RK4, step, 10 * step**4) == 2
-    assert fm.separatrix_correct(pd.METHOD_RK4, step, step**4 / 1e4) < 2
+    assert fm.separatrix_correct("rk4", step, 10 * step**4) == 2
+    assert fm.separatrix_correct("rk4", step, step**4 / 1e4) < 2
 
 
 @pytest.mark.parametrize("delta", [1e-6, 1e-9, 1e-12])
 def test_the_kernel_classifies_by_the_closed_form_where_the_integrator_cannot(delta):
     """The same launch, 2 = v_crit (1 -+ delta) with kappa = (1 +- delta)^-2, k = 1, R = 0,
     through the kernel with DOPRI5 at a loose rtol: the closed-form criterion decides."""
-    out = np.empty(pd.N_ROW)
-    returns = pd.dimensionless(pd.MODEL_RIGID, 1.0, 4.0, (1 + delta) ** 2, 0.0,
-                               pd.INTEGRATOR_DOPRI5, 1e-4, 1e-6, 0.0, 10, out)
-    assert returns == ST.ok and out[pd.ROW_REGIME] == pd.REGIME_PERIOD_1
-    escapes = pd.dimensionless(pd.MODEL_RIGID, 1.0, 4.0, (1 - delta) ** 2, 0.0,
-                               pd.INTEGRATOR_DOPRI5, 1e-4, 1e-6, 0.0, 10, out)
-    assert escapes == ST.escape and out[pd.ROW_REGIME] == pd.REGIME_ESCAPE
+    method = dict(integrator="dopri5", rtol=1e-4, atol=1e-6, max_impacts=10)
+    out, status, _ = kernel_point("rotary_pendulum", method, model="rigid", k=1.0,
+                                  kappa=(1 + delta) ** 2, R=0.0)
+    assert status == "ok"
+    assert out["regime"] == 0  # period_1
+    out, status, _ = kernel_point("rotary_pendulum", method, model="rigid", k=1.0,
+                                  kappa=(1 - delta) ** 2, R=0.0)
+    assert status == "escape" and out["regime"] == 3  # escape

@@ -1,0 +1,98 @@
+"""numba's on-disk cache, keyed by each module's own import closure.
+
+numba reuses cached machine code after checking only the decorated function's own source
+file, so a kernel calling into a changed module would silently run the old callee. Here a
+function's cache stamp is a hash of its file and of every project module that file imports,
+directly or through others (found by reading the imports, lazy ones included): an edit to
+kernels/balancer.py recompiles the balancer and nothing else, an edit to the integration
+core recompiles every pendulum system, and an edit to kernels/__init__.py everything.
+
+``install()`` must run before any kernel is decorated (numba picks a function's cache
+locator then); kernels/__init__.py calls it.
+"""
+
+import ast
+import hashlib
+import os
+import shutil
+from functools import lru_cache
+from pathlib import Path
+
+import numba
+from numba.core import caching
+
+ROOT = Path(__file__).resolve().parent.parent
+PACKAGES = ("kernels", "tests", "benchmarks")  # whose modules count as the project's
+# numba 0.68 made these public; earlier releases name them with a leading underscore
+_CACHE_IMPL = getattr(caching, "CacheImpl", None) or caching._CacheImpl
+_USER_LOCATOR = (getattr(caching, "UserProvidedCacheLocator", None)
+                 or caching._UserProvidedCacheLocator)
+
+
+def _module_file(name: str, root: Path) -> Path | None:
+    base = root.joinpath(*name.split("."))
+    for path in (base.with_suffix(".py"), base / "__init__.py"):
+        if path.is_file():
+            return path
+    return None
+
+
+def _imported_modules(path: Path) -> set[str]:
+    """The project modules a file imports, with their packages (lazy imports included)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_bytes(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+            names.update(f"{node.module}.{alias.name}" for alias in node.names)
+    found = set()
+    for name in names:
+        if name.split(".")[0] in PACKAGES:
+            parts = name.split(".")
+            found.update(".".join(parts[:i]) for i in range(1, len(parts) + 1))
+    return found
+
+
+def import_closure(path: Path, root: Path = ROOT) -> list[Path]:
+    """The file and every project module it imports, directly or not, sorted."""
+    seen, todo = {Path(path).resolve()}, [Path(path).resolve()]
+    while todo:
+        for name in _imported_modules(todo.pop()):
+            found = _module_file(name, root)
+            if found is not None and found.resolve() not in seen:
+                seen.add(found.resolve())
+                todo.append(found.resolve())
+    return sorted(seen)
+
+
+@lru_cache(maxsize=None)
+def stamp(path: str, root: Path = ROOT) -> str:
+    """A hash of the contents of a file's import closure."""
+    digest = hashlib.sha256()
+    for member in import_closure(Path(path), root):
+        digest.update(str(member.relative_to(root)).encode() + b"\0" + member.read_bytes())
+    return digest.hexdigest()
+
+
+class ImportClosureLocator(_USER_LOCATOR):
+    """The user-provided cache directory, stamped by the import closure of the source."""
+
+    def get_source_stamp(self):
+        return stamp(str(Path(self._py_file).resolve()))
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if not Path(py_file).resolve().is_relative_to(ROOT):
+            return None
+        return super().from_function(py_func, py_file)
+
+
+def install() -> None:
+    """Cache under $NUMBA_CACHE_DIR, else kernels/__pycache__, with the closure stamp."""
+    base = Path(os.environ.get("NUMBA_CACHE_DIR") or Path(__file__).parent / "__pycache__")
+    for old in base.glob("numba-*"):  # the caches of a whole-package hash, before this
+        shutil.rmtree(old, ignore_errors=True)
+    numba.config.CACHE_DIR = str(base)
+    if ImportClosureLocator not in _CACHE_IMPL._locator_classes:
+        _CACHE_IMPL._locator_classes.insert(0, ImportClosureLocator)

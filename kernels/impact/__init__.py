@@ -1,0 +1,60 @@
+"""The integration core: flights between impacts and the impact map, for any system.
+
+It knows nothing about pendulums. A mechanism describes itself as a ``System`` (what flies)
+and an impact law (what happens at a contact); the core is specialised to it by factories
+(numba functions closing over the system's functions, so numba's cache keys them).
+
+The contract:
+
+1. A state is a tuple of floats of the system's own size; ``rhs(y, p)`` returns its
+   derivative, ``scales(y0, y1, rtol, atol)`` the error scale of each component.
+2. Steps are explicit Runge-Kutta: DOPRI5 (embedded error, PI step control, dense cubic
+   Hermite output) or classical RK4 at a fixed step (runge_kutta.py). A partial step of
+   length s from a step's start is the state at t + s to the method's order: events, turning
+   points and peaks are polished on those, never on the interpolant alone.
+3. The first step after a restart on a surface is capped by the ballistic return time of
+   the gap the flight leaves (``start_gap``), so a short bounce is not stepped over (H4).
+4. Events are the zero crossings, each in one direction, of ``event_values(t, y, data)``;
+   ``event_rates(t, y, dy, data)`` are their time derivatives. They are found on the
+   interpolant (chord bound, sign samples, an extremum check for grazing whose value is
+   taken on an exact partial step, Illinois), polished by Newton on exact partial steps,
+   never at the restart point, never from a step that starts beyond the level (events.py).
+5. ``on_event(e, t, y, f, data, p) -> (terminal, data)``: a terminal event ends the flight;
+   another (a pass by the tool) updates the system data and the flight goes on.
+6. ``monitor(t, y, f) -> (angle, rate, acceleration)``: the quantity whose amplitude and
+   peak acceleration a flight reports (turning points and peaks polished with ``refine``).
+7. A flight ends in one of outcomes.FLIGHT_*, with its cost as a Counters record
+   (accepted and rejected steps, events). A step whose error estimate is not finite is
+   rejected; an RK4 step (no estimate) into a state that is not finite ends the flight.
+8. The impact map (impact_map.py) alternates contacts and flights on a mechanism with two
+   generalised coordinates, a carrier (a rotor, possibly driven at constant speed) and a
+   body: Newton's law on the normal speed through the body's impulse response, the
+   accumulation of a chatter sequence (Zeno) into sticking or sliding, the tool's slide,
+   escape, a budget of impacts, period classification on section states, and Aitken's
+   extrapolation where the map is smooth.
+"""
+
+from collections import namedtuple
+
+#: what flies: the vector field, error scales, events (values, rates, directions, what each
+#: does), the start gap for the first-step cap, and the monitored quantity
+System = namedtuple("System", ["rhs", "scales", "event_values", "event_rates", "directions",
+                               "on_event", "start_gap", "monitor"])
+
+#: what happens at a contact, for the impact map (impact_map.py). ``model``: the flying
+#: body's functions the map needs (namedtuple fields response(y, J_phi, J_psi, p) = M^-1 J^T
+#: on the (rotor, body) velocities, compose(t, phi, w, psi, dpsi) -> (t, y), and the
+#: accessors rotor_angle(t, y), rotor_speed(y), psi(y), dpsi(y)); the flight and the slide (a
+#: flight of the constrained system); the start of the sequence; the section state that
+#: classifies cycles (and the state rebuilt from one); the contact Jacobian; the normal speed
+#: (gap units, > 0 closing) and the striker's (for the outputs); the free normal acceleration
+#: (for the chatter's accumulation point); the gap's rate after the law (< 0: the contact
+#: opens); whether a contact at zero speed is pressed into a slide; the state at a chatter's
+#: accumulation point; a closed-form escape before a flight; the system data for the flight
+#: after a contact; which flight event is an escape; the shortest flight that opens a new
+#: section; the flights' horizon; and whether the section map is smooth (Aitken may
+#: extrapolate it)
+Contact = namedtuple("Contact", [
+    "model", "flight", "slide", "first", "key", "from_key", "jacobian", "normal_speed",
+    "striker_speed", "normal_acceleration", "gap_rate_after", "pressed", "settle",
+    "escapes_before", "flight_data", "escape_event", "min_flight", "horizon", "smooth"])

@@ -1,0 +1,39 @@
+"""How a flight or an impact sequence ended, and what it cost: one enumeration, one record."""
+
+from collections import namedtuple
+
+from numba import njit
+
+from kernels import INNER_OPTIONS
+
+#: how a flight ended
+FLIGHT_EVENT = 0  # a terminal event (a contact, an escape): the flight's event says which
+FLIGHT_HORIZON = 1  # no terminal event within the horizon
+FLIGHT_MAX_STEPS = 2  # the step budget ran out
+FLIGHT_UNDERFLOW = 3  # the step size fell below round-off
+FLIGHT_NONFINITE = 4  # a fixed step (RK4) reached a state that is not finite
+
+#: what a flight or a whole impact sequence cost: accepted and rejected steps, located events
+Counters = namedtuple("Counters", ["steps", "rejected", "events"])
+NO_COST = Counters(0, 0, 0)
+
+#: the settings of a flight: the method (runge_kutta.METHOD_*), its tolerances, RK4's step,
+#: the step budget and the horizon (in the flight's time)
+Settings = namedtuple("Settings", ["method", "rtol", "atol", "dt", "max_steps", "horizon"])
+
+
+@njit(**INNER_OPTIONS)
+def add(a, b):
+    """The sum of two Counters records."""
+    return Counters(a.steps + b.steps, a.rejected + b.rejected, a.events + b.events)
+
+#: how an impact sequence ended
+SEQUENCE_CYCLE = 0  # it settled into a cycle of impacts (its period and chatter say which)
+SEQUENCE_ESCAPE = 1  # the flight went over the top (relative rotation)
+SEQUENCE_NO_IMPACT = 2  # a flight met no tool within the horizon
+SEQUENCE_NOT_PERIODIC = 3  # no cycle within the budget of impacts, and no contraction
+SEQUENCE_MAX_STEPS = 4  # a flight's step budget ran out, or the map still contracts
+SEQUENCE_UNDERFLOW = 5  # a flight's step size fell below round-off
+SEQUENCE_DEGENERATE = 6  # the contact does not open after the impact law
+SEQUENCE_SEPARATRIX = 7  # the cycle's launch speed is the escape threshold, to rounding
+SEQUENCE_NONFINITE = 8  # a flight reached a state that is not finite

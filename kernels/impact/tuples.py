@@ -1,0 +1,124 @@
+"""Elementwise arithmetic on states held as tuples of floats, for any state size.
+
+A model keeps its own state size (2 for a pendulum at constant rotor speed, 4 with the rotor)
+as a tuple: in numba a tuple lives in registers, and a 4-tuple step ran 1.8x faster than the
+same step on a 4-element array. numba has no elementwise tuple arithmetic, so each function
+below is an ``overload`` that writes straight-line code for the tuple's length, with the
+same order of operations as a hand-written component (``y + h * (a1 k1 + a2 k2)``).
+Plain-Python versions of the same functions serve tests and callers outside numba.
+"""
+
+import math
+
+from numba.core import types
+from numba.extending import overload
+
+
+def _compile(name: str, args: str, body: str, prelude: str = ""):
+    namespace = {"math": math}
+    exec(f"def {name}({args}):\n{prelude}    return {body}\n", namespace)
+    return namespace[name]
+
+
+def _tuple(items: list[str]) -> str:
+    return "(" + ", ".join(items) + ("," if len(items) == 1 else "") + ")"
+
+
+def lincomb(y, h, coefs, ks):
+    """y + h (coefs[0] ks[0] + coefs[1] ks[1] + ...), elementwise."""
+    return tuple(y[i] + h * sum(c * k[i] for c, k in zip(coefs, ks)) for i in range(len(y)))
+
+
+def weighted(h, coefs, ks):
+    """h (coefs[0] ks[0] + coefs[1] ks[1] + ...), elementwise."""
+    return tuple(h * sum(c * k[i] for c, k in zip(coefs, ks)) for i in range(len(ks[0])))
+
+
+def hermite(s, h, y0, f0, y1, f1):
+    """The cubic Hermite interpolant of a step at s in [0, h], from the values and slopes
+    at both ends, elementwise."""
+    t = s / h
+    t2, t3 = t * t, t * t * t
+    return tuple((2 * t3 - 3 * t2 + 1) * a + (t3 - 2 * t2 + t) * h * da
+                 + (-2 * t3 + 3 * t2) * b + (t3 - t2) * h * db
+                 for a, da, b, db in zip(y0, f0, y1, f1))
+
+
+def hermite_slope(s, h, y0, f0, y1, f1):
+    """The slope of the cubic Hermite interpolant at s, elementwise."""
+    t = s / h
+    return tuple((6 * t * t - 6 * t) * a / h + (3 * t * t - 4 * t + 1) * da
+                 + (-6 * t * t + 6 * t) * b / h + (3 * t * t - 2 * t) * db
+                 for a, da, b, db in zip(y0, f0, y1, f1))
+
+
+def error_norm(err, scales):
+    """The RMS of err over scales: sqrt(mean((err_i / scale_i)^2))."""
+    return (sum((e / c) ** 2 for e, c in zip(err, scales)) / len(err)) ** 0.5
+
+
+def relative_scales(y0, y1, rtol, atol):
+    """The usual error scale of each component: atol + rtol max(|y0|, |y1|)."""
+    return tuple(atol + rtol * max(abs(a), abs(b)) for a, b in zip(y0, y1))
+
+
+def _length(tup):
+    return tup.count if isinstance(tup, types.UniTuple) else len(tup.types)
+
+
+def _products(m: int, i: int) -> str:
+    return " + ".join(f"coefs[{j}] * ks[{j}][{i}]" for j in range(m))
+
+
+@overload(lincomb, inline="always")
+def _lincomb(y, h, coefs, ks):
+    n, m = _length(y), _length(coefs)
+    return _compile("lincomb", "y, h, coefs, ks",
+                    _tuple([f"y[{i}] + h * ({_products(m, i)})" for i in range(n)]))
+
+
+@overload(weighted, inline="always")
+def _weighted(h, coefs, ks):
+    n, m = _length(ks.types[0] if hasattr(ks, "types") else ks.dtype), _length(coefs)
+    return _compile("weighted", "h, coefs, ks",
+                    _tuple([f"h * ({_products(m, i)})" for i in range(n)]))
+
+
+_HERMITE_WEIGHTS = ("    t = s / h\n    t2, t3 = t * t, t * t * t\n"
+                    "    w0, w1 = 2 * t3 - 3 * t2 + 1, t3 - 2 * t2 + t\n"
+                    "    w2, w3 = -2 * t3 + 3 * t2, t3 - t2\n")
+_SLOPE_WEIGHTS = ("    t = s / h\n"
+                  "    w0, w1 = 6 * t * t - 6 * t, 3 * t * t - 4 * t + 1\n"
+                  "    w2, w3 = -6 * t * t + 6 * t, 3 * t * t - 2 * t\n")
+
+
+def _cubic(name: str, weights: str, term: str):
+    """The overload of a cubic Hermite expression: its four weights at s, then ``term`` of
+    each component i."""
+    def implementation(s, h, y0, f0, y1, f1):
+        return _compile(name, "s, h, y0, f0, y1, f1",
+                        _tuple([term.format(i=i) for i in range(_length(y0))]), weights)
+    return implementation
+
+
+overload(hermite, inline="always")(_cubic(
+    "hermite", _HERMITE_WEIGHTS,
+    "(w0 * y0[{i}] + w1 * h * f0[{i}] + w2 * y1[{i}] + w3 * h * f1[{i}])"))
+overload(hermite_slope, inline="always")(_cubic(
+    "hermite_slope", _SLOPE_WEIGHTS,
+    "(w0 * y0[{i}] / h + w1 * f0[{i}] + w2 * y1[{i}] / h + w3 * f1[{i}])"))
+
+
+@overload(relative_scales, inline="always")
+def _relative_scales(y0, y1, rtol, atol):
+    n = _length(y0)
+    return _compile("relative_scales", "y0, y1, rtol, atol",
+                    _tuple([f"atol + rtol * max(abs(y0[{i}]), abs(y1[{i}]))"
+                            for i in range(n)]))
+
+
+@overload(error_norm, inline="always")
+def _error_norm(err, scales):
+    n = _length(err)
+    total = " + ".join(f"(err[{i}] / scales[{i}]) ** 2" for i in range(n))
+    return _compile("error_norm", "err, scales", f"math.sqrt({1.0 / n!r} * ({total}))")

@@ -1,0 +1,379 @@
+"""The rotary pendulum's models: what flies between impacts, and its closed forms.
+
+Time is the rotor angle at nominal speed, tau = omega1 t (' = d/dtau); psi is the pendulum's
+angle relative to the rotor (psi = 0: the striker radially outward). Three models, each a
+``Model`` of functions for the tools and the integration core:
+
+- paper (seed 004's equation, P1-P2): psi'' = -a(psi) (psi'^2 + xi) sin psi,
+  a = k X/(1 + xi X), X = k^2 + 1 + 2 k cos psi; state (psi, psi'); p = (k, xi);
+- rigid (the physically derived pendulum at constant rotor speed, P5):
+  psi'' = -kappa k sin psi; state (psi, psi'); p = (k, kappa);
+- rotor (a rotor of finite inertia with a linear motor law, P8-P10): state
+  (phi1, phi1', psi, psi'), lengths in l_cm, inertias in J_c; p = (k_cm, xi, j1, s_m, idle).
+
+The first two run at constant rotor speed ("driven": the rotor angle is the time, the rotor
+absorbs every impulse); the rotor model's rotor angle and speed are states. A contact's
+impulse acts along a contact Jacobian J = (J_phi1, J_psi) on (phi1', psi'); ``response``
+is M^-1 J^T (driven: (0, 1), the rotor does not move).
+"""
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from kernels import KERNEL_OPTIONS, INLINE_OPTIONS
+from kernels.extrema import peak_search
+from kernels.impact.tuples import relative_scales
+
+MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR = 0, 1, 2
+
+#: the functions of a model (see the module docstring)
+Model = namedtuple("Model", [
+    "rhs", "scales", "monitor", "accelerations", "response", "rotor_angle", "rotor_speed",
+    "psi", "dpsi", "compose", "critical_speed", "shift", "driven"])
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(96)  # for the half-period quadrature
+
+
+# ---------------------------------------------------------------- constant rotor speed
+
+@njit(**KERNEL_OPTIONS)
+def paper_acceleration(psi, dpsi, k, xi):
+    """psi'' of seed 004's equation (P1-P2)."""
+    x = k * k + 1.0 + 2.0 * k * math.cos(psi)
+    return -k * x / (1.0 + xi * x) * (dpsi * dpsi + xi) * math.sin(psi)
+
+
+@njit(**INLINE_OPTIONS)
+def paper_rhs(y, p):
+    return (y[1], paper_acceleration(y[0], y[1], p[0], p[1]))
+
+
+@njit(**INLINE_OPTIONS)
+def rigid_rhs(y, p):
+    k, kappa = p
+    return (y[1], -kappa * k * math.sin(y[0]))
+
+
+@njit(**INLINE_OPTIONS)
+def driven_monitor(t, y, f):
+    return y[0], f[0], f[1]
+
+
+@njit(**INLINE_OPTIONS)
+def driven_rotor_angle(t, y):
+    return t
+
+
+@njit(**INLINE_OPTIONS)
+def driven_rotor_speed(y):
+    return 1.0
+
+
+@njit(**INLINE_OPTIONS)
+def driven_psi(y):
+    return y[0]
+
+
+@njit(**INLINE_OPTIONS)
+def driven_dpsi(y):
+    return y[1]
+
+
+@njit(**INLINE_OPTIONS)
+def driven_compose(t, phi1, w, psi, dpsi):
+    """The state with these coordinates: the rotor angle is the time."""
+    return phi1, (psi, dpsi)
+
+
+@njit(**INLINE_OPTIONS)
+def driven_shift(t, y, angle):
+    """The same state with the rotor angle (the time) measured from another origin."""
+    return t + angle, y
+
+
+@njit(**INLINE_OPTIONS)
+def driven_response(y, j_phi, j_psi, p):
+    """M^-1 J^T up to scale for a rotor that does not move: the impulse changes psi' only."""
+    return 0.0, 1.0
+
+
+def driven_model(rhs, critical_speed):
+    @njit(**INLINE_OPTIONS)
+    def accelerations(t, y, p):
+        return 0.0, rhs(y, p)[1]
+
+    return Model(rhs, relative_scales, driven_monitor, accelerations, driven_response,
+                 driven_rotor_angle, driven_rotor_speed, driven_psi, driven_dpsi,
+                 driven_compose, critical_speed, driven_shift, True)
+
+
+# ---------------------------------------------------------------- rotor of finite inertia
+
+@njit(**KERNEL_OPTIONS)
+def mass_matrix(psi, k, xi, j1):
+    """(M11, M12, M22) of T = M11 phi1'^2/2 + M12 phi1' psi' + M22 psi'^2/2 (P8)."""
+    c = math.cos(psi)
+    return j1 + 1.0 + xi * (k * k + 1.0 + 2.0 * k * c), 1.0 + xi * (1.0 + k * c), 1.0 + xi
+
+
+@njit(**KERNEL_OPTIONS)
+def rotor_accelerations(w, psi, dpsi, k, xi, j1, slope, idle):
+    """(phi1'', psi'') from (P9)-(P10), solving the 2x2 mass-matrix system."""
+    m11, m12, m22 = mass_matrix(psi, k, xi, j1)
+    s = xi * k * math.sin(psi)
+    rhs1 = slope * (idle - w) + s * (2.0 * w * dpsi + dpsi * dpsi)
+    rhs2 = -s * w * w
+    det = m11 * m22 - m12 * m12
+    return (m22 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_rhs(y, p):
+    k, xi, j1, slope, idle = p
+    a1, b2 = rotor_accelerations(y[1], y[2], y[3], k, xi, j1, slope, idle)
+    return (y[1], a1, y[3], b2)
+
+
+@njit(**KERNEL_OPTIONS)
+def rotor_scales(y0, y1, rtol, atol):
+    """The error scales; phi1 grows without bound and what matters is its error per step
+    (a lab-fixed tool sits at a rotor angle), so it is scaled as a variable of size 1."""
+    return (atol + rtol, atol + rtol * max(abs(y0[1]), abs(y1[1])),
+            atol + rtol * max(abs(y0[2]), abs(y1[2])),
+            atol + rtol * max(abs(y0[3]), abs(y1[3])))
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_monitor(t, y, f):
+    return y[2], f[2], f[3]
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_model_accelerations(t, y, p):
+    k, xi, j1, slope, idle = p
+    return rotor_accelerations(y[1], y[2], y[3], k, xi, j1, slope, idle)
+
+
+@njit(**KERNEL_OPTIONS)
+def rotor_response(y, j_phi, j_psi, p):
+    """M^-1 J^T at the state's configuration."""
+    k, xi, j1, slope, idle = p
+    m11, m12, m22 = mass_matrix(y[2], k, xi, j1)
+    det = m11 * m22 - m12 * m12
+    return (m22 * j_phi - m12 * j_psi) / det, (m11 * j_psi - m12 * j_phi) / det
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_rotor_angle(t, y):
+    return y[0]
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_rotor_speed(y):
+    return y[1]
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_psi(y):
+    return y[2]
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_dpsi(y):
+    return y[3]
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_compose(t, phi1, w, psi, dpsi):
+    return t, (phi1, w, psi, dpsi)
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_shift(t, y, angle):
+    """The same state with the rotor angle measured from another origin (the dynamics do
+    not depend on it: phi1 is cyclic)."""
+    return t, (y[0] + angle, y[1], y[2], y[3])
+
+
+@njit(**INLINE_OPTIONS)
+def no_critical_speed(p):
+    return math.inf  # no closed form: escape is an event of the flight
+
+
+ROTOR = Model(rotor_rhs, rotor_scales, rotor_monitor, rotor_model_accelerations,
+              rotor_response, rotor_rotor_angle, rotor_rotor_speed, rotor_psi, rotor_dpsi,
+              rotor_compose, no_critical_speed, rotor_shift, False)
+
+
+@njit(**KERNEL_OPTIONS)
+def kinetic_energy(y, p):
+    """T of the rotor model (P8): with the angular momentum, conserved by a free rotor."""
+    k, xi, j1, slope, idle = p
+    m11, m12, m22 = mass_matrix(y[2], k, xi, j1)
+    return 0.5 * m11 * y[1] ** 2 + m12 * y[1] * y[3] + 0.5 * m22 * y[3] ** 2
+
+
+# ---------------------------------------------------------------- closed forms
+
+@njit(**KERNEL_OPTIONS)
+def _g(x, xi):
+    """g(X) = ln(1 + xi X)/xi^2 - X/xi: the first integral is (psi'^2 + xi) exp(-g) = const."""
+    return math.log1p(xi * x) / (xi * xi) - x / xi
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_critical_speed(k, xi):
+    """v_crit (P4): launched from psi = 0 faster than this, the pendulum goes over the top."""
+    return math.sqrt(xi * math.expm1(_g((k - 1.0) ** 2, xi) - _g((1.0 + k) ** 2, xi)))
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_u(psi, v, k, xi):
+    """psi'^2 as a function of psi on the flight launched from psi = 0 with speed v (P3)."""
+    x0 = (1.0 + k) ** 2
+    x = k * k + 1.0 + 2.0 * k * math.cos(psi)
+    return (v * v + xi) * math.exp(_g(x0, xi) - _g(x, xi)) - xi
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_amplitude(v, k, xi):
+    """Amplitude A (P-O2): the root of u(A) = 0 in (0, pi), by safeguarded Newton on
+    X_A = k^2 + 1 + 2k cos A. NaN if v >= v_crit (escape)."""
+    if v >= paper_critical_speed(k, xi):
+        return math.nan
+    x0 = (1.0 + k) ** 2
+    target = math.log(v * v + xi) - math.log(xi) + _g(x0, xi)  # = g(X_A), g decreasing
+    lo, hi = (k - 1.0) ** 2, x0
+    x = 0.5 * (lo + hi)
+    for _ in range(200):
+        f = _g(x, xi) - target
+        if f > 0.0:
+            lo = x
+        else:
+            hi = x
+        slope = 1.0 / (xi * (1.0 + xi * x)) - 1.0 / xi
+        step = x - f / slope
+        x_new = step if lo < step < hi else 0.5 * (lo + hi)
+        if abs(x_new - x) <= 1e-16 * x0:
+            x = x_new
+            break
+        x = x_new
+    c = (x - k * k - 1.0) / (2.0 * k)
+    return math.acos(min(1.0, max(-1.0, c)))
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_half_period(v, k, xi, amplitude):
+    """Flight time from impact to impact, tau1 = 2 int_0^A dpsi / sqrt(u) (P-O3), with
+    psi = A sin s removing the end singularity, by 96-point Gauss-Legendre."""
+    total = 0.0
+    half = 0.25 * math.pi
+    for j in range(_GL_X.shape[0]):
+        s = half * (_GL_X[j] + 1.0)
+        u = paper_u(amplitude * math.sin(s), v, k, xi)
+        total += _GL_W[j] * amplitude * math.cos(s) / math.sqrt(max(u, 1e-300))
+    return 2.0 * half * total
+
+
+@njit(**KERNEL_OPTIONS)
+def _paper_flight_acceleration(psi, data):
+    """|psi''| at psi on the flight launched with speed v: a (u + xi) |sin psi|."""
+    v, k, xi = data
+    x = k * k + 1.0 + 2.0 * k * math.cos(psi)
+    return k * x / (1.0 + xi * x) * (paper_u(psi, v, k, xi) + xi) * abs(math.sin(psi))
+
+
+_golden_paper, _ = peak_search(_paper_flight_acceleration)
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_peak_acceleration(v, k, xi, amplitude):
+    """max |psi''| over the flight = max over psi in [0, A] of a (u + xi) |sin psi| (P-O4):
+    a dense sample, then golden section around the best sample."""
+    n = 32
+    best_j, best = 0, -1.0
+    for j in range(n + 1):
+        val = _paper_flight_acceleration(amplitude * j / n, (v, k, xi))
+        if val > best:
+            best_j, best = j, val
+    lo = amplitude * max(0, best_j - 1) / n
+    hi = amplitude * min(n, best_j + 1) / n
+    return max(best, _golden_paper((v, k, xi), lo, hi, 1e-14 * amplitude))
+
+
+@njit(**KERNEL_OPTIONS)
+def ellipk(m):
+    """Complete elliptic integral K(m) = pi / (2 AGM(1, sqrt(1 - m))), m < 1 (as scipy's
+    ellipk, parameter m = k^2; matches it to ~2e-16)."""
+    a, b = 1.0, math.sqrt(1.0 - m)
+    for _ in range(60):
+        if abs(a - b) <= 1e-16 * a:
+            break
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+    return 0.5 * math.pi / a
+
+
+@njit(**KERNEL_OPTIONS)
+def rigid_flight(v, omega2):
+    """Rigid pendulum psi'' = -Omega^2 sin psi launched from psi = 0 with speed v:
+    (amplitude, flight time tau1, peak |psi''|) for m = v^2/(4 Omega^2) < 1 (P-O8),
+    NaNs at and beyond the separatrix m = 1 (the pendulum goes over the top)."""
+    omega = math.sqrt(omega2)
+    m = v * v / (4.0 * omega2)
+    if not m < 1.0:
+        return math.nan, math.nan, math.nan
+    amplitude = 2.0 * math.asin(math.sqrt(m))
+    tau1 = 2.0 * ellipk(m) / omega
+    return amplitude, tau1, omega2 * math.sin(min(amplitude, 0.5 * math.pi))
+
+
+@njit(**KERNEL_OPTIONS)
+def closed_flight(model, v, p):
+    """A driven flight from psi = 0 at speed v back to psi = 0, in closed form: (amplitude,
+    flight time, peak |psi''|); NaNs if it does not come back."""
+    if model == MODEL_PAPER:
+        k, xi = p
+        amplitude = paper_amplitude(v, k, xi)
+        return (amplitude, paper_half_period(v, k, xi, amplitude),
+                paper_peak_acceleration(v, k, xi, amplitude))
+    return rigid_flight(v, p[0] * p[1])
+
+
+@njit(**INLINE_OPTIONS)
+def paper_critical(p):
+    return paper_critical_speed(p[0], p[1])
+
+
+@njit(**INLINE_OPTIONS)
+def rigid_critical(p):
+    return 2.0 * math.sqrt(p[0] * p[1])
+
+
+PAPER = driven_model(paper_rhs, paper_critical)
+RIGID = driven_model(rigid_rhs, rigid_critical)
+
+
+@njit(**KERNEL_OPTIONS)
+def steady_state_speed(k, r):
+    """Fixed point of the affine impact map on the rotor stop: pre-impact (= launch) speed
+    v* (P-O6)."""
+    return (1.0 + k) * (1.0 + r) / (1.0 - r)
+
+
+@njit(**KERNEL_OPTIONS)
+def impacts_to_converge(k, r, v_crit, tol):
+    """Impacts from rest (v_0 = 0) until |v_j - v*| <= tol v*, or until the launch speed
+    reaches v_crit (escape): returns (count, escaped). v_j - v* = -v* R^j exactly."""
+    v_star = steady_state_speed(k, r)
+    v = 0.0
+    for j in range(1, 100000):
+        launch = (1.0 + k) * (1.0 + r) + r * v  # speed after impact j
+        if launch >= v_crit:
+            return j, True
+        v = launch  # a reversible flight returns with the launch speed
+        if abs(v - v_star) <= tol * v_star:
+            return j, False
+    return 100000, False

@@ -1,0 +1,475 @@
+"""What the rotary pendulum strikes: the tools, each a gap function, an impact law and (where
+the striker can ride the tool) a slide. ``rotor_stop(model)`` and ``lab_window(model)``
+compose a tool with a model (kernels/pendulum/models.py) into a ``Contact``: the flight of
+the integration core plus what the impact map needs at a contact.
+
+rotor_stop (the paper's): the striker meets the tool when psi reaches 0 from below (a stop on
+the rotor); Newton's law acts on the striker's normal speed in the lab, (1 + k) phi1' + psi'
+in omega1 l_contact units (contact Jacobian J = (1 + k, 1) on (phi1', psi')), with phi1' the
+rotor speed: at constant rotor speed psi'+ = -(1 + k)(1 + R) - R psi'- (the paper's law (5)).
+Escape: psi falling through -pi (the pendulum goes over the top). Data: (0, k), the stop's
+angle and k.
+
+lab_window (a blade fixed in the frame, dynamics.md §1.7, H11): the contact point is at
+radius rho = sqrt(X), X = k^2 + 1 + 2k cos psi, and at the polar angle G = phi1 + beta(psi),
+beta = atan2(sin psi, k + cos psi); the blade is radial at lab angle 0 (mod 2 pi) and
+reaches in down to the striker's radius at |psi| = window. The gap is G against the blade's
+faces at G = lower and lower + 2 pi; a face met with |psi| > window is passed (the striker
+goes inside the blade). Newton's law acts on the normal speed rho G', G' = phi1' + h psi',
+h = dbeta/dpsi (J = (1, h)). After a plastic contact (R = 0, or an accumulated chatter) the
+striker slides along the face while pressed into it: a flight of the constrained system
+(kernels/impact) until the pressing vanishes (release) or |psi| reaches the blade's edge.
+Escape: |psi| rising through pi. Data: (lower, window, k, level, side), the last contact's
+face level and side (+1: met rising, -1: falling, 0: slid off the edge).
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from kernels import INNER_OPTIONS, INLINE_OPTIONS
+from kernels.extrema import peak_search
+from kernels.impact import Contact, System
+from kernels.impact.events import make_illinois
+from kernels.impact.flight import Flight, make_flight
+from kernels.impact.outcomes import FLIGHT_EVENT, NO_COST
+from kernels.impact.tuples import relative_scales
+
+TWO_PI = 2.0 * math.pi
+SECTION_MIN_FLIGHT = 0.1  # blade: an impact after a shorter flight continues an episode
+LAB_HORIZON = 200.0 * math.pi  # rotor radians without a contact: regime no_impact
+
+@njit(**INLINE_OPTIONS)
+def beta(psi, k):
+    """Polar angle of the contact point ahead of the rotor arm."""
+    return math.atan2(math.sin(psi), k + math.cos(psi))
+
+
+@njit(**INLINE_OPTIONS)
+def h_ratio(psi, k):
+    """h = dbeta/dpsi = (1 + k cos psi)/X."""
+    return (1.0 + k * math.cos(psi)) / (k * k + 1.0 + 2.0 * k * math.cos(psi))
+
+
+@njit(**INLINE_OPTIONS)
+def h_slope(psi, k):
+    """dh/dpsi = k (1 - k^2) sin psi / X^2."""
+    x = k * k + 1.0 + 2.0 * k * math.cos(psi)
+    return k * (1.0 - k * k) * math.sin(psi) / (x * x)
+
+
+@njit(**INNER_OPTIONS)
+def face_psi(target, psi, k):
+    """psi on a face, beta(psi) = target (Newton from psi)."""
+    for _ in range(50):
+        step = (beta(psi, k) - target) / h_ratio(psi, k)
+        psi -= step
+        if abs(step) <= 1e-15:
+            break
+    return psi
+
+
+@njit(**INLINE_OPTIONS)
+def _never(t, y, data, p):
+    return False
+
+
+def stop_flight(model):
+    """The free flight of a pendulum below a stop fixed on the rotor at psi = data[0]:
+    events 0, the stop (psi rising through it), and 1, escape (psi falling through -pi)."""
+    psi_of, monitor = model.psi, model.monitor
+
+    @njit(**INLINE_OPTIONS)
+    def values(t, y, data):
+        return psi_of(y) - data[0], psi_of(y) + math.pi
+
+    @njit(**INLINE_OPTIONS)
+    def rates(t, y, dy, data):
+        rate = monitor(t, y, dy)[1]
+        return rate, rate
+
+    @njit(**INLINE_OPTIONS)
+    def on_event(e, t, y, f, data, p):
+        return True, data
+
+    @njit(**INLINE_OPTIONS)
+    def start_gap(t, y, f, data, p):
+        angle, rate, accel = monitor(t, y, f)
+        return rate, accel
+
+    return make_flight(System(model.rhs, model.scales, values, rates, (1, -1), on_event,
+                              start_gap, monitor))[0]
+
+
+def rotor_stop(model):
+    """The rotor stop composed with a model (see the module docstring)."""
+    psi_of, dpsi_of = model.psi, model.dpsi
+    critical_speed, accelerations = model.critical_speed, model.accelerations
+    compose, rotor_angle, rotor_speed = model.compose, model.rotor_angle, model.rotor_speed
+    flight = stop_flight(model)
+
+    @njit(**INLINE_OPTIONS)
+    def first(p, data):
+        """At rest on the stop, the rotor at its starting speed: the first impact at once."""
+        t, y = compose(0.0, 0.0, p[-1], 0.0, 0.0)  # driven models ignore the speed
+        return t, y, data
+
+    @njit(**INLINE_OPTIONS)
+    def key(t, y, data, p):
+        return rotor_speed(y), dpsi_of(y)
+
+    @njit(**INLINE_OPTIONS)
+    def from_key(key, t, y, data, p):
+        """The pre-impact state with this key, at the rotor angle of (t, y)."""
+        return compose(t, rotor_angle(t, y), key[0], 0.0, key[1])
+
+    @njit(**INLINE_OPTIONS)
+    def jacobian(t, y, data):
+        return 1.0 + data[1], 1.0
+
+    @njit(**INLINE_OPTIONS)
+    def normal_speed(t, y, data, p):
+        return (1.0 + data[1]) * rotor_speed(y) + dpsi_of(y)
+
+    @njit(**INLINE_OPTIONS)
+    def normal_acceleration(t, y, data, p):
+        return abs(accelerations(t, y, p)[1])
+
+    @njit(**INLINE_OPTIONS)
+    def gap_rate_after(t, y, data, p):
+        """psi' after the impact: the pendulum must leave the stop (psi' < 0); a light rotor
+        thrown back by the impact leaves it at rest or pushes it on (degenerate)."""
+        return dpsi_of(y)
+
+    @njit(**INLINE_OPTIONS)
+    def settle(t, y, data, p, dt):
+        return t, y
+
+    @njit(**INLINE_OPTIONS)
+    def no_slide(t, y, data, p, settings, refine):
+        return True, t, y, data, 0.0, 0.0, NO_COST
+
+    @njit(**INLINE_OPTIONS)
+    def flight_data(data):
+        return data
+
+    @njit(**INLINE_OPTIONS)
+    def escapes_before(t, y, data, p):
+        """A driven pendulum launched from the stop faster than its critical speed goes
+        over the top: decided in closed form, not by a horizon (H1, H2, H12)."""
+        return -dpsi_of(y) >= critical_speed(p)
+
+    return Contact(model, flight, no_slide, first, key, from_key, jacobian, normal_speed,
+                   normal_speed, normal_acceleration, gap_rate_after, _never, settle,
+                   escapes_before, flight_data, 1, 0.0, math.inf, True)
+
+
+SLIDE_SAMPLES = 128  # pressing samples along a kinematic slide (a release is bracketed)
+
+
+@njit(**INLINE_OPTIONS)
+def after_slide(released, data):
+    """The blade data after a slide: off the blade's edge the striker is past the face, in
+    the direction it pressed (side 0: no face was just met)."""
+    lower, window, k, level, side = data
+    if released:
+        return data
+    return lower, window, k, level if side > 0.0 else level - TWO_PI, 0.0
+
+
+def _kinematic_slide(model, free_gap_acceleration):
+    """The slide at constant rotor speed, in closed form: on the face G = level the rotor
+    angle is the time, so psi follows from beta(psi) = level - tau, and psi' = -1/h. psi
+    falls monotonically (h > 0 for |psi| < pi/2) from the contact to the blade's edge
+    -window; the release is the first sign change of the pressing sampled along it
+    (SLIDE_SAMPLES, Illinois on the bracket); psi'' = -h'/h^3 on the face, its peak
+    refined by golden section. No integration: closed form before integration."""
+    compose, psi_of = model.compose, model.psi
+
+    @njit(**INNER_OPTIONS)
+    def face_pressing(psi, data):
+        """side * G''_free on the face at psi: > 0 keeps the contact."""
+        p, k, side = data
+        tt, y = compose(0.0, 0.0, 1.0, psi, -1.0 / h_ratio(psi, k))
+        return side * free_gap_acceleration(tt, y, p, k)
+
+    @njit(**INNER_OPTIONS)
+    def face_acceleration(psi, data):
+        k = data[1]
+        hr = h_ratio(psi, k)
+        return abs(h_slope(psi, k) / (hr * hr * hr))
+
+    release_root = make_illinois(face_pressing)
+    _, refine_face_peak = peak_search(face_acceleration)
+
+    @njit(**INNER_OPTIONS)
+    def slide(t, y, data, p, settings, refine):
+        """Ride the face from the contact (zero normal speed) until released or off the
+        blade's edge: (released, t, y, data, amplitude, peak, cost)."""
+        lower, window, k, level, side = data
+        fd = (p, k, side)
+        psi_c = psi_of(y)
+        end = -window
+        released = False
+        prev, f_prev = psi_c, face_pressing(psi_c, fd)
+        for j in range(1, SLIDE_SAMPLES + 1):
+            q = psi_c + (end - psi_c) * j / SLIDE_SAMPLES
+            f = face_pressing(q, fd)
+            if f <= 0.0:
+                released = True
+                # pressed where the contact was decided (pressed()), released by q
+                end = q if f_prev <= 0.0 else release_root(fd, q, prev, f, f_prev, 1e-15)[0]
+                break
+            prev, f_prev = q, f
+        peak = 0.0
+        if refine:
+            xs = np.linspace(end, psi_c, SLIDE_SAMPLES + 1)
+            values = np.empty(xs.shape[0])
+            for j in range(xs.shape[0]):
+                values[j] = face_acceleration(xs[j], fd)
+            peak = refine_face_peak(fd, xs, values, 1e-12 * (psi_c - end) + 1e-300)
+        t_end = level - beta(end, k)
+        t_end, y_end = compose(t_end, t_end, 1.0, end, -1.0 / h_ratio(end, k))
+        return (released, t_end, y_end, after_slide(released, data),
+                max(abs(psi_c), abs(end)), peak, NO_COST)
+
+    return slide
+
+
+def _constrained_slide(model):
+    """The slide of a rotor of finite inertia: a flight of the constrained system (psi,
+    psi') on the face G = level, the rotor angle phi1 = level - beta(psi) and speed -h psi';
+    psi'' keeps G'' = 0 with the contact force along J = (1, h), until the pressing
+    vanishes (release) or |psi| reaches the blade's edge."""
+    compose, accelerations, response = model.compose, model.accelerations, model.response
+    psi_of, rotor_speed = model.psi, model.rotor_speed
+
+    @njit(**INLINE_OPTIONS)
+    def on_face(t, s, sp):
+        level, k = sp[1], sp[2]
+        psi, dpsi = s
+        return compose(t, level - beta(psi, k), -h_ratio(psi, k) * dpsi, psi, dpsi)
+
+    @njit(**INNER_OPTIONS)
+    def slide_state(t, s, sp):
+        """(psi'' on the face, the free G'' that the contact force cancels)."""
+        p, k = sp[0], sp[2]
+        psi, dpsi = s
+        tt, y = on_face(t, s, sp)
+        hr = h_ratio(psi, k)
+        a_phi, a_psi = accelerations(tt, y, p)
+        g2 = a_phi + hr * a_psi + h_slope(psi, k) * dpsi * dpsi
+        x_phi, x_psi = response(y, 1.0, hr, p)
+        return a_psi - x_psi * g2 / (x_phi + hr * x_psi), g2
+
+    @njit(**INLINE_OPTIONS)
+    def slide_rhs(s, sp):
+        return s[1], slide_state(0.0, s, sp)[0]
+
+    @njit(**INLINE_OPTIONS)
+    def slide_values(t, s, data):
+        sp, side, window = data
+        return side * slide_state(t, s, sp)[1], abs(s[0]) - window
+
+    @njit(**INLINE_OPTIONS)
+    def slide_rates(t, s, ds, data):
+        return math.nan, math.copysign(1.0, s[0]) * ds[0]
+
+    @njit(**INLINE_OPTIONS)
+    def slide_on_event(e, t, s, f, data, p):
+        return True, data
+
+    @njit(**INLINE_OPTIONS)
+    def slide_start(t, s, f, data, p):
+        return 0.0, 0.0
+
+    @njit(**INLINE_OPTIONS)
+    def slide_monitor(t, s, f):
+        return s[0], f[0], f[1]
+
+    slide_flight, _ = make_flight(System(slide_rhs, relative_scales, slide_values,
+                                         slide_rates, (-1, 1), slide_on_event, slide_start,
+                                         slide_monitor))
+
+    @njit(**INNER_OPTIONS)
+    def slide(t, y, data, p, settings, refine):
+        """As the kinematic slide, by integration."""
+        lower, window, k, level, side = data
+        sp = (p, level, k)
+        psi = psi_of(y)
+        s0 = (psi, -rotor_speed(y) / h_ratio(psi, k))
+        fl = slide_flight(t, s0, sp, (sp, side, window), settings, refine)
+        t_end, y_end = on_face(fl.t, fl.y, sp)
+        released = fl.event == 0
+        return (released, t_end, y_end, after_slide(released, data), fl.amplitude, fl.peak,
+                fl.cost)
+
+    return slide
+
+
+def lab_window(model):
+    """The lab-fixed blade composed with a model (see the module docstring)."""
+    psi_of, dpsi_of, monitor = model.psi, model.dpsi, model.monitor
+    compose, rotor_angle, rotor_speed = model.compose, model.rotor_angle, model.rotor_speed
+    accelerations, response = model.accelerations, model.response
+
+    @njit(**INLINE_OPTIONS)
+    def values(t, y, data):
+        """G against each face, (phi1 - face) + beta: the rotor angle grows without bound,
+        and (phi1 + beta) - face would lose the gap's last digits to its magnitude (a
+        chatter bounce 1e-15 deep at phi1 = 30 was lost)."""
+        lower, k = data[0], data[2]
+        phi1, b = rotor_angle(t, y), beta(psi_of(y), k)
+        return (phi1 - (lower + TWO_PI)) + b, (phi1 - lower) + b, abs(psi_of(y)) - math.pi
+
+    @njit(**INLINE_OPTIONS)
+    def rates(t, y, dy, data):
+        k = data[2]
+        psi, dpsi = psi_of(y), monitor(t, y, dy)[1]
+        g_rate = rotor_speed(y) + h_ratio(psi, k) * dpsi
+        return g_rate, g_rate, math.copysign(1.0, psi) * dpsi
+
+    @njit(**INLINE_OPTIONS)
+    def on_event(e, t, y, f, data, p):
+        lower, window, k = data[0], data[1], data[2]
+        if e == 2:
+            return True, data  # escape
+        level = lower + TWO_PI if e == 0 else lower
+        side = 1.0 if e == 0 else -1.0
+        if abs(psi_of(y)) <= window:
+            return True, (lower, window, k, level, side)
+        # inside the blade's reach: passed, the faces move on
+        return False, (level if e == 0 else lower - TWO_PI, window, k, level, side)
+
+    @njit(**INNER_OPTIONS)
+    def free_gap_acceleration(t, y, p, k):
+        """G'' of the free motion: phi1'' + h psi'' + h' psi'^2."""
+        a_phi, a_psi = accelerations(t, y, p)
+        psi, dpsi = psi_of(y), dpsi_of(y)
+        return a_phi + h_ratio(psi, k) * a_psi + h_slope(psi, k) * dpsi * dpsi
+
+    @njit(**INLINE_OPTIONS)
+    def start_gap(t, y, f, data, p):
+        k = data[2]
+        g_rate = rotor_speed(y) + h_ratio(psi_of(y), k) * dpsi_of(y)
+        return g_rate, free_gap_acceleration(t, y, p, k)
+
+    free_flight, _ = make_flight(System(model.rhs, model.scales, values, rates, (1, -1, 1),
+                                        on_event, start_gap, monitor))
+    shift = model.shift
+
+    @njit(**INNER_OPTIONS)
+    def flight(t, y, p, data, settings, refine):
+        """The free flight with the rotor angle measured from the last contact's face: it
+        grows without bound, and a chatter bounce 1e-15 deep is below the rounding of a
+        rotor angle of 30 (the time, at constant speed). A contact ends exactly on its
+        face."""
+        lower, window, k, level, side = data
+        t_rel, y_rel = shift(t, y, -level)
+        fl = free_flight(t_rel, y_rel, p, (lower - level, window, k, 0.0, side), settings,
+                         refine)
+        t_end, y_end = shift(fl.t, fl.y, level)
+        lower2, window2, k2, level2, side2 = fl.data
+        level2 += level
+        if fl.outcome == FLIGHT_EVENT and fl.event < 2:
+            # exactly on the face: psi from the rotor angle, whose rounding grows with it
+            phi1, psi = rotor_angle(t_end, y_end), psi_of(y_end)
+            t_end, y_end = compose(t_end, phi1, rotor_speed(y_end),
+                                   face_psi(level2 - phi1, psi, k), dpsi_of(y_end))
+        return Flight(fl.outcome, fl.event, t_end, y_end, fl.f,
+                      (lower2 + level, window2, k2, level2, side2), fl.amplitude, fl.peak,
+                      fl.cost)
+
+    if model.driven:
+        slide = _kinematic_slide(model, free_gap_acceleration)
+    else:
+        slide = _constrained_slide(model)
+
+    @njit(**INLINE_OPTIONS)
+    def first(p, data):
+        """At rest relative to the rotor on the blade's working face (met rising): the first
+        impact at once, as on the rotor stop."""
+        lower, window, k, level, side = data
+        t, y = compose(0.0, 0.0, p[-1], 0.0, 0.0)
+        return t, y, (lower, window, k, 0.0, 1.0)
+
+    @njit(**INLINE_OPTIONS)
+    def key(t, y, data, p):
+        k = data[2]
+        return (psi_of(y), rotor_speed(y) + h_ratio(psi_of(y), k) * dpsi_of(y),
+                rotor_speed(y))
+
+    @njit(**INLINE_OPTIONS)
+    def from_key(key, t, y, data, p):
+        return t, y
+
+    @njit(**INLINE_OPTIONS)
+    def jacobian(t, y, data):
+        return 1.0, h_ratio(psi_of(y), data[2])
+
+    @njit(**INLINE_OPTIONS)
+    def normal_speed(t, y, data, p):
+        """G' towards the face (> 0: closing) of the last contact."""
+        k, side = data[2], data[4]
+        return side * (rotor_speed(y) + h_ratio(psi_of(y), k) * dpsi_of(y))
+
+    @njit(**INLINE_OPTIONS)
+    def striker_speed(t, y, data, p):
+        """The contact point's normal speed rho |G'| in omega1 l_contact units."""
+        k = data[2]
+        psi = psi_of(y)
+        return (math.sqrt(k * k + 1.0 + 2.0 * k * math.cos(psi))
+                * abs(rotor_speed(y) + h_ratio(psi, k) * dpsi_of(y)))
+
+    @njit(**INLINE_OPTIONS)
+    def normal_acceleration(t, y, data, p):
+        return abs(free_gap_acceleration(t, y, p, data[2]))
+
+    @njit(**INLINE_OPTIONS)
+    def gap_rate_after(t, y, data, p):
+        return -1.0  # Newton's law on G' always reverses (or zeroes) the approach
+
+    @njit(**INLINE_OPTIONS)
+    def pressing(t, y, data, p):
+        """The free G'' into the face of the last contact, with zero normal speed."""
+        k, side = data[2], data[4]
+        psi = psi_of(y)
+        tt, on = compose(t, rotor_angle(t, y), rotor_speed(y), psi,
+                         -rotor_speed(y) / h_ratio(psi, k))
+        return side * free_gap_acceleration(tt, on, p, k)
+
+    @njit(**INLINE_OPTIONS)
+    def pressed(t, y, data, p):
+        """Does a contact with zero normal speed start a slide? The pressing at the contact,
+        or, where it vanishes (at psi = 0 both h' and psi'' vanish: a degenerate touch),
+        just along the slide, where psi has fallen."""
+        now = pressing(t, y, data, p)
+        if abs(now) > 1e-9:
+            return now > 0.0
+        k = data[2]
+        psi = psi_of(y) - 1e-6
+        tt, y2 = compose(t, data[3] - beta(psi, k), rotor_speed(y), psi, dpsi_of(y))
+        return pressing(tt, y2, data, p) > 0.0
+
+    @njit(**INLINE_OPTIONS)
+    def settle(t, y, data, p, dt):
+        """The chatter's accumulation point, dt later (the ballistic tail, H6, P-O14): the
+        rotor turned on by its speed times dt, psi on the face, no normal speed."""
+        k, level = data[2], data[3]
+        w = rotor_speed(y)
+        phi1 = rotor_angle(t, y) + w * dt
+        psi = face_psi(level - phi1, psi_of(y), k)
+        return compose(t + dt, phi1, w, psi, -w / h_ratio(psi, k))
+
+    @njit(**INLINE_OPTIONS)
+    def flight_data(data):
+        """The faces around the striker after a contact: behind it if it bounced off the
+        face it met rising, ahead if falling; past the face after sliding off its edge."""
+        lower, window, k, level, side = data
+        new_lower = level - TWO_PI if side > 0.0 else level
+        return new_lower, window, k, level, side
+
+    return Contact(model, flight, slide, first, key, from_key, jacobian, normal_speed,
+                   striker_speed, normal_acceleration, gap_rate_after, pressed, settle,
+                   _never, flight_data, 2, SECTION_MIN_FLIGHT, LAB_HORIZON, False)

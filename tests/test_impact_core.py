@@ -1,0 +1,243 @@
+"""The integration core (kernels/impact) on systems with known solutions, without any pendulum:
+x'' = -c x - g between two levels (an oscillator for c = 1, g = 0; free fall for c = 0,
+g = 1), and y' = y^2, which blows up at t = 1/y0.
+
+Orders of RK4 and DOPRI5 measured by regression, event times against the analytic crossing,
+a grazing contact found with a window of 1/100 of a step, no event at the restart point, the
+ballistic first-step cap (H4), Newton polish limited by atol (H5), the direction filter, the
+bracketing root finder's status, the step budget and the step-size underflow."""
+
+import math
+
+import numpy as np
+import pytest
+from numba import njit
+
+from kernels import INLINE_OPTIONS
+from kernels.impact import System
+from kernels.impact.events import ILLINOIS_ITERATIONS, make_illinois
+from kernels.impact.flight import make_flight
+from kernels.impact.impact_map import aitken, classify_period
+from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
+                                     FLIGHT_NONFINITE, FLIGHT_UNDERFLOW)
+from kernels.impact.tuples import relative_scales
+from tests.probes import fixed_steps_of, settings
+
+OSCILLATOR, FREE_FALL = (1.0, 0.0), (0.0, 1.0)  # p = (c, g)
+UPPER, LOWER = 0, 1  # the events: x rising through data[0], x falling through data[1]
+
+
+@njit(**INLINE_OPTIONS)
+def line_rhs(y, p):
+    return y[1], -p[0] * y[0] - p[1]
+
+
+@njit(**INLINE_OPTIONS)
+def line_values(t, y, data):
+    return y[0] - data[0], y[0] - data[1]
+
+
+@njit(**INLINE_OPTIONS)
+def line_rates(t, y, dy, data):
+    return dy[0], dy[0]
+
+
+@njit(**INLINE_OPTIONS)
+def terminal(e, t, y, f, data, p):
+    return True, data
+
+
+@njit(**INLINE_OPTIONS)
+def line_start(t, y, f, data, p):
+    return f[0], f[1]
+
+
+@njit(**INLINE_OPTIONS)
+def line_monitor(t, y, f):
+    return y[0], f[0], f[1]
+
+
+LINE = System(line_rhs, relative_scales, line_values, line_rates, (1, -1), terminal,
+              line_start, line_monitor)
+_line_flight, _ = make_flight(LINE)
+fixed_steps = fixed_steps_of(line_rhs, relative_scales)
+
+
+@njit
+def line_flight(t, y, p, data, s, refine):
+    return _line_flight(t, y, p, data, s, refine)
+
+
+@njit(**INLINE_OPTIONS)
+def blowup_rhs(y, p):
+    return (y[0] * y[0],)
+
+
+@njit(**INLINE_OPTIONS)
+def blowup_values(t, y, data):
+    return (y[0] + 1.0,)  # never crosses: the flight runs until its steps underflow
+
+
+@njit(**INLINE_OPTIONS)
+def blowup_rates(t, y, dy, data):
+    return (dy[0],)
+
+
+@njit(**INLINE_OPTIONS)
+def blowup_start(t, y, f, data, p):
+    return 0.0, 0.0
+
+
+@njit(**INLINE_OPTIONS)
+def blowup_monitor(t, y, f):
+    return y[0], f[0], 0.0
+
+
+_blowup_flight, _ = make_flight(System(blowup_rhs, relative_scales, blowup_values,
+                                       blowup_rates, (1,), terminal, blowup_start,
+                                       blowup_monitor))
+
+
+@njit
+def blowup_flight(t, y, s):
+    return _blowup_flight(t, y, 0.0, 0.0, s, False)
+
+
+@pytest.mark.parametrize("method, order", [("rk4", 4), ("dopri5", 5)])
+def test_order_of_each_method_measured_by_regression(method, order):
+    """Global error of the oscillator at t = 2 from (1, 0) over fixed step sizes: the
+    fitted slope of log error against log h is the method's order."""
+    code = settings(method).method
+    steps = np.array([10, 20, 40, 80])
+    errors = []
+    for n in steps:
+        x, v = fixed_steps(code, (1.0, 0.0), OSCILLATOR, 2.0 / n, n)
+        errors.append(math.hypot(x - math.cos(2.0), v + math.sin(2.0)))
+    slope = -np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    assert order - 0.25 < slope < order + 0.3, (slope, errors)
+
+
+@pytest.mark.parametrize("level", [0.9, 0.3, -0.5, -0.99])
+def test_event_time_matches_the_analytic_crossing(level):
+    """The oscillator from (1, 0) falls through the level at t = arccos(level)."""
+    fl = line_flight(0.0, (1.0, 0.0), OSCILLATOR, (2.0, level), settings(), False)
+    assert fl.outcome == FLIGHT_EVENT and fl.event == LOWER
+    assert fl.t == pytest.approx(math.acos(level), abs=1e-11)
+    assert fl.y[0] == pytest.approx(level, abs=1e-12)
+
+
+def test_direction_filter_passes_a_crossing_the_wrong_way():
+    """From x = 0.5 falling, the level 0.2 is crossed downwards first (not an event of the
+    rising level) and then upwards at t = pi/2 + arcsin(0.5) + arcsin(0.2) (relative to the
+    start's phase)."""
+    # x = cos(t + t0) with cos t0 = 0.5, falling: x = 0.2 rising again at 2 pi - arccos 0.2
+    t0 = math.acos(0.5)
+    fl = line_flight(0.0, (0.5, -math.sin(t0)), OSCILLATOR, (0.2, -2.0), settings(), False)
+    assert fl.outcome == FLIGHT_EVENT and fl.event == UPPER
+    assert fl.t == pytest.approx(2 * math.pi - math.acos(0.2) - t0, abs=1e-11)
+
+
+@pytest.mark.parametrize("phase", np.arange(8) / 8)
+def test_grazing_contact_is_found_with_a_window_of_a_hundredth_of_a_step(phase):
+    """RK4 at the fixed step dt = 0.02: the oscillator's apex x = 1 passes a level 1 - eps
+    for a window 2 delta = dt/100 (cos delta = 1 - eps). No step end and no sign sample
+    falls inside it; the extremum check on the interpolant finds it from every phase of the
+    step grid (its interpolation error, dt^4/384 = 4e-10, is below eps = 5e-9)."""
+    dt = 0.02
+    delta = dt / 200
+    level = math.cos(delta)
+    t0 = phase * dt  # the exact state at t0 on x = sin t
+    fl = line_flight(t0, (math.sin(t0), math.cos(t0)), OSCILLATOR, (level, -2.0),
+                     settings("rk4", dt=dt), False)
+    assert fl.outcome == FLIGHT_EVENT and fl.event == UPPER
+    assert abs(fl.t - (0.5 * math.pi - delta)) < 0.5 * delta  # on the window's near side
+
+
+def test_no_event_at_the_restart_point():
+    """Free fall from exactly on the lower level, moving up: no event at the start; the
+    fall back through the level at t = 2 v/g is the event. Moving down from the level:
+    no event at the start either (the crossing needs the far side before it)."""
+    fl = line_flight(0.0, (0.0, 1.0), FREE_FALL, (5.0, 0.0), settings(), False)
+    assert fl.outcome == FLIGHT_EVENT and fl.event == LOWER
+    assert fl.t == pytest.approx(2.0, rel=1e-12)
+    fl = line_flight(0.0, (0.0, -1.0), FREE_FALL, (5.0, 0.0), settings(horizon=3.0), False)
+    assert fl.outcome == FLIGHT_HORIZON and fl.cost.events == 0
+
+
+@pytest.mark.parametrize("speed", [1e-2, 1e-4, 1e-6])
+def test_H4_a_bounce_shorter_than_a_step_is_seen(speed):
+    """Leaving the level at a small speed, pulled back: the first step is capped by the
+    ballistic return time 2 v/g, so the bounce is found however short it is."""
+    fl = line_flight(0.0, (0.0, speed), FREE_FALL, (5.0, 0.0), settings(), False)
+    assert fl.outcome == FLIGHT_EVENT and fl.event == LOWER
+    assert fl.t == pytest.approx(2.0 * speed, rel=1e-9)
+    assert fl.y[1] == pytest.approx(-speed, rel=1e-9)
+
+
+def test_H5_event_times_are_limited_by_atol_unless_it_is_on_the_variables_scale():
+    """At rtol = 1e-12 the located time of x = 0.3 follows atol: 1e-6 (loose against x of
+    size 1) limits it; 1e-14 gives round-off, the Newton polish on exact partial steps
+    (the interpolant alone is O(h^4))."""
+    exact = math.acos(0.3)
+    errors = {}
+    for atol in (1e-6, 1e-14):
+        fl = line_flight(0.0, (1.0, 0.0), OSCILLATOR, (2.0, 0.3), settings(atol=atol), False)
+        errors[atol] = abs(fl.t - exact)
+    assert errors[1e-14] < 1e-13
+    assert errors[1e-6] > 100 * errors[1e-14]
+
+
+def test_the_step_budget_ends_a_flight():
+    fl = line_flight(0.0, (1.0, 0.0), OSCILLATOR, (2.0, -2.0), settings(max_steps=7), False)
+    assert fl.outcome == FLIGHT_MAX_STEPS and fl.cost.steps + fl.cost.rejected == 7
+
+
+def test_the_step_size_underflows_at_a_blowup():
+    """y' = y^2 from y = 1 blows up at t = 1: DOPRI5's steps shrink until they fall below
+    round-off of t, and the flight says so there instead of looping (a NaN error estimate
+    is a rejection: it was once taken as a step, and the flight ran on NaN for its whole
+    budget)."""
+    fl = blowup_flight(0.0, (1.0,), settings(rtol=1e-8, atol=1e-10))
+    assert fl.outcome == FLIGHT_UNDERFLOW
+    assert 1.0 - fl.t < 1e-9 and fl.cost.rejected > 0
+    # RK4 has no error estimate: it steps into the blow-up, and the flight ends there
+    fl = blowup_flight(0.0, (1.0,), settings("rk4", dt=0.01))
+    assert fl.outcome == FLIGHT_NONFINITE and 0.9 < fl.t < 1.1 and np.isfinite(fl.y[0])
+
+
+@njit(**INLINE_OPTIONS)
+def _linear(x, data):
+    return x - data
+
+
+@njit(**INLINE_OPTIONS)
+def _step(x, data):
+    return 1.0 if x > data else -1.0
+
+
+_root_linear = make_illinois(_linear)
+_root_step = make_illinois(_step)
+
+
+@njit
+def roots(a, tol):
+    return _root_linear(a, 0.0, 1.0, -a, 1.0 - a, tol), _root_step(a, 0.0, 1.0, -1.0, 1.0,
+                                                                    tol)
+
+
+def test_the_bracketing_root_finder_returns_its_status():
+    (x, ok), (x_step, ok_step) = roots(0.3, 1e-12)
+    assert ok and x == pytest.approx(0.3, abs=1e-15)
+    assert ok_step and abs(x_step - 0.3) < 1e-12  # a jump is bracketed like a root
+    (x, ok), (x_step, ok_step) = roots(0.3, 0.0)  # a bracket of zero width is never reached
+    assert ok  # f(x) = 0 exactly is reached on the linear function
+    assert not ok_step and abs(x_step - 0.3) < 1e-12 and ILLINOIS_ITERATIONS >= 60
+
+
+def test_period_classification_and_aitken():
+    history = np.array([[0.0, 1.0], [0.5, 2.0], [0.2, 3.0], [0.5, 2.0], [0.2, 3.0]])
+    assert classify_period(history, 5, 1e-12, 8) == 2
+    assert classify_period(history, 4, 1e-12, 8) == 0
+    # a geometric sequence x_j = 1 + 0.5^j: Aitken gives its limit from three terms
+    assert aitken(2.0, 1.5, 1.25) == pytest.approx(1.0, rel=1e-15)
+    assert aitken(1.0, 2.0, 4.0) == 4.0  # diverging: no extrapolation
