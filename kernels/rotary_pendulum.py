@@ -128,13 +128,20 @@ DECLARATION = Mechanism(
         Output("n_events", "1", "impact events located by the integrator"),
         Output("method_used", "1", "method that produced the values",
                flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5}),
+        Output("error_estimate", "1", "auto: estimated relative error of the steady cycle's "
+               "values (the largest over amplitude, frequency ratio, period, impact speed "
+               "and interval, acceleration peak, rotor speed ratio), from two DOPRI5 solves "
+               "8 times apart in rtol; 0 by the closed form; inf where the two solves reach "
+               "different regimes; NaN with a fixed integrator or without a cycle"),
     ),
     status=("ok", "escape", "no_impact", "not_periodic", "separatrix", "max_steps",
             "step_underflow", "degenerate", "nonfinite"),
     usable=("escape",),
     method=(
         Quantity("integrator", "1", "auto (the closed form where the model has one, else "
-                 "DOPRI5 at a tolerance calibrated for tol), closed_form, rk4 or dopri5",
+                 "DOPRI5 twice, 8 times apart in rtol, the finer solve reported with its "
+                 "error_estimate and refined where that exceeds tol/10), closed_form, rk4 "
+                 "or dopri5",
                  default="auto",
                  choices={"auto": INTEGRATOR_AUTO, "closed_form": INTEGRATOR_CLOSED,
                           "rk4": INTEGRATOR_RK4, "dopri5": INTEGRATOR_DOPRI5}),
@@ -246,6 +253,67 @@ def distinct_rows(keys):
     return cases, inverse.ravel()
 
 
+#: the values whose relative error auto estimates (and bounds by tol)
+ESTIMATED = (ROW.amplitude, ROW.frequency, ROW.interval, ROW.speed, ROW.acceleration,
+             ROW.rotor_speed)
+#: auto without a closed form: each case is solved at AUTO_COARSE times the calibrated rtol
+#: and AUTO_REFINE times finer; the finer solve is reported, with its error estimated as
+#: |coarse - fine| / (AUTO_REFINE - 1) (DOPRI5's global error proportional to rtol); a case
+#: whose estimate exceeds AUTO_ACCEPT tol (a safety factor on that proportionality) is
+#: solved again AUTO_REFINE times finer, at most AUTO_ROUNDS times
+AUTO_ACCEPT = 0.1
+AUTO_COARSE = 2.0
+AUTO_REFINE = 8.0
+AUTO_ROUNDS = 3
+
+
+def solve_system(block, sub, method_code, rtol, atol, dt, max_impacts):
+    """The rows of the cases of one system, by one integrator at one tolerance."""
+    out = np.empty((sub.shape[0], N_ROW))
+    block(sub, method_code, rtol, atol, dt, max_impacts, out, np.empty((1, 2)))
+    return out
+
+
+def estimated_error(coarse, fine):
+    """Relative difference of the cycle's values of two solves over the finer one's error
+    ratio: the estimated relative error of the finer solve; inf where the two disagree on
+    the outcome, the period or the chatter; NaN where neither has a cycle."""
+    values = [np.abs(coarse[:, j] - fine[:, j]) / np.abs(fine[:, j]) for j in ESTIMATED]
+    with np.errstate(invalid="ignore"):
+        diff = np.nanmax(np.where(np.isnan(values), -np.inf, values), axis=0)
+    error = diff / (AUTO_REFINE - 1.0)
+    same = ((coarse[:, ROW.outcome] == fine[:, ROW.outcome])
+            & (np.nan_to_num(coarse[:, ROW.period]) == np.nan_to_num(fine[:, ROW.period]))
+            & (np.nan_to_num(coarse[:, ROW.chatter]) == np.nan_to_num(fine[:, ROW.chatter])))
+    error = np.where(same, np.maximum(error, 0.0), np.inf)
+    return np.where(same & (fine[:, ROW.outcome] != SEQUENCE_CYCLE), np.nan, error)
+
+
+def solve_auto(block, sub, tol, max_impacts):
+    """auto on a system without a closed form: DOPRI5 at AUTO_COARSE times the calibrated
+    rtol and AUTO_REFINE times finer, refined further where the estimate misses tol / 2. Counters
+    add up every solve."""
+    rtol = AUTO_COARSE * auto_rtol(tol)
+    coarse = solve_system(block, sub, METHOD_DOPRI5, rtol, rtol * AUTO_ATOL_PER_RTOL, 0.0,
+                          max_impacts)
+    rows = coarse.copy()
+    pending = np.arange(sub.shape[0])
+    for _ in range(AUTO_ROUNDS):
+        rtol /= AUTO_REFINE
+        fine = solve_system(block, sub[pending], METHOD_DOPRI5, max(rtol, 1e-14),
+                            max(rtol, 1e-14) * AUTO_ATOL_PER_RTOL, 0.0, max_impacts)
+        error = estimated_error(coarse, fine)
+        counters = [ROW.steps, ROW.rejected, ROW.events]
+        fine[:, counters] += rows[np.ix_(pending, counters)]
+        fine[:, ROW.error] = error
+        rows[pending] = fine
+        more = (error > AUTO_ACCEPT * tol) & (rtol > 1e-14)
+        coarse, pending = fine[more], pending[more]
+        if not pending.size:
+            break
+    return rows
+
+
 def solve_cases(cases, method):
     """The result row (cases.ROW) of every case, in omega1 units: closed form where the
     model has one and the method allows it, else the integration core on the case's
@@ -258,27 +326,30 @@ def solve_cases(cases, method):
         rows_closed = np.empty((int(closed.sum()), N_ROW))
         closed_form_block(np.ascontiguousarray(cases[closed]), rows_closed)
         rows_closed[:, ROW.method] = USED_CLOSED
+        # exact to round-off: the estimate auto reports is 0 where there is a cycle
+        rows_closed[:, ROW.error] = np.where(
+            rows_closed[:, ROW.outcome] == SEQUENCE_CYCLE,
+            0.0 if method.integrator == INTEGRATOR_AUTO else np.nan, np.nan)
         rows[closed] = rows_closed
     integrated = ~closed
     if integrated.any():
         from kernels.pendulum.systems import SYSTEMS
 
         rk4 = method.integrator == INTEGRATOR_RK4
-        rtol, atol = method.rtol, method.atol
-        if method.integrator == INTEGRATOR_AUTO:  # no closed form: DOPRI5 calibrated for tol
-            rtol = auto_rtol(method.tol)
-            atol = rtol * AUTO_ATOL_PER_RTOL
         for (m, t), block in SYSTEMS.items():
             chosen = integrated & (model == m) & (tool == t)
             if not chosen.any():
                 continue
             sub = np.ascontiguousarray(cases[chosen])
-            out = np.empty((sub.shape[0], N_ROW))
-            block(sub, METHOD_RK4 if rk4 else METHOD_DOPRI5, rtol, atol, method.dt,
-                  method.max_impacts, out, np.empty((1, 2)))
+            if method.integrator == INTEGRATOR_AUTO:
+                out = solve_auto(block, sub, method.tol, method.max_impacts)
+            else:
+                out = solve_system(block, sub, METHOD_RK4 if rk4 else METHOD_DOPRI5,
+                                   method.rtol, method.atol, method.dt, method.max_impacts)
+                out[:, ROW.error] = np.nan
             out[:, ROW.method] = USED_RK4 if rk4 else USED_DOPRI5
             if t == TOOL_ROTOR_STOP and m != MODEL_ROTOR:
-                tol = 1e-9 if rk4 else max(10.0 * rtol, 1e-12)
+                tol = 1e-9 if rk4 else max(10.0 * method.rtol, 1e-12)
                 for j in range(sub.shape[0]):
                     v, v_crit, escapes, separatrix = driven_stop_preamble(sub[j], tol, out[j])
                     if separatrix:
@@ -336,6 +407,12 @@ def run(params, method):
     out[O.n_rejected] = d[ROW.rejected]
     out[O.n_events] = d[ROW.events]
     out[O.method_used] = d[ROW.method]
+    out[O.error_estimate] = d[ROW.error]
+    # values of a steady cycle exist only where there is one: an integrated run launched on
+    # the separatrix comes back with finite numbers of a cycle whose period is infinite
+    cycle_values = [O.amplitude, O.frequency_ratio, O.period, O.impact_speed, O.impact_interval,
+                    O.acceleration_peak, O.rotor_speed_ratio, O.error_estimate]
+    out[np.ix_(cycle_values, ~cycle)] = np.nan
     # a steady cycle whose values did not come out finite is not a design value
     values = out[[O.amplitude, O.impact_speed, O.impact_interval, O.acceleration_peak]]
     status[cycle & ~np.all(np.isfinite(values), axis=0)] = S.nonfinite

@@ -182,28 +182,85 @@ def info(atlas_file):
     click.echo(f"history: {ds.attrs.get('history', '?')}")
 
 
+def _at_values(pairs) -> dict[str, float]:
+    """--at DIM=VALUE options as a dict (the value in the axis's own units)."""
+    at = {}
+    for pair in pairs:
+        dim, sep, value = pair.partition("=")
+        value = value.strip()
+        unit = "deg" if value.endswith(("deg", "°")) else ""
+        try:
+            number = float(value.removesuffix("deg").removesuffix("°"))
+        except ValueError:
+            sep = ""
+        if not sep:
+            raise UserError(f"at: {pair!r} must be AXIS=NUMBER in the axis's units, or "
+                            "NUMBERdeg for an angle, e.g. crank_angle=90deg")
+        at[dim.strip()] = (number, unit)
+    return at
+
+
 @cli.command()
 @click.argument("atlas_file", metavar="ATLAS")
 @click.option("--where", "where", default=None, help='condition, e.g. "lambda2 <= 3"')
-@click.option("--sort", default=None, help="variable to sort by (ascending)")
+@click.option("--sort", default=None, help="variable to sort by (ascending; see --descending)")
+@click.option("--descending", "--desc", is_flag=True,
+              help="sort largest first (the best designs first, for a quantity to maximise)")
 @click.option("--limit", type=click.IntRange(1, None), default=None, help="at most N rows")
-@click.option("--columns", default=None, help="comma-separated variables to show")
+@click.option("--columns", default=None,
+              help="comma-separated variables to show (default: every variable with one "
+                   "value per grid point)")
+@click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
+              help="profiles at this value of their axis (nearest), e.g. crank_angle=90")
 @click.option("--format", "fmt", type=click.Choice(["table", "csv", "json"]), default="table")
-def query(atlas_file, where, sort, limit, columns, fmt):
-    """Select designs from an atlas with a safe expression language."""
-    from sweep.query import parse, select
+def query(atlas_file, where, sort, descending, limit, columns, at, fmt):
+    """Select designs from an atlas with a safe expression language; flags print as their
+    meanings, the table prints units under its header."""
+    import json
+
+    import numpy as np
+
+    from sweep.query import parse, select, units_of
 
     if where is not None:
         parse(where)  # syntax errors before the atlas is read
+    at_values = _at_values(at)
     ds = _open_atlas(atlas_file)
     cols = [c.strip() for c in columns.split(",") if c.strip()] if columns else None
-    frame = select(ds, where, sort=sort, limit=limit, columns=cols)
+    frame = select(ds, where, sort=sort, limit=limit, columns=cols, descending=descending,
+                   at=at_values)
     if fmt == "csv":
         click.echo(frame.to_csv(index=False), nl=False)
     elif fmt == "json":
-        click.echo(frame.to_json(orient="records", double_precision=15))
+        # Python's shortest repr of each float: no digits beyond what the value carries
+        records = [{k: (None if isinstance(v, float) and v != v else
+                        v.item() if hasattr(v, "item") else v) for k, v in row.items()}
+                   for row in frame.to_dict(orient="records")]
+        click.echo(json.dumps(records))
+    elif not len(frame):
+        click.echo("no matching points")
     else:
-        click.echo(frame.to_string(index=False) if len(frame) else "no matching points")
+        import pandas as pd
+
+        units = units_of(ds, frame.columns)
+        header = pd.MultiIndex.from_arrays([list(frame.columns),
+                                            [f"[{u}]" if u else "" for u in units]])
+        click.echo(frame.set_axis(header, axis=1).to_string(index=False))
+    if fmt == "table" or (limit is None and len(frame) > 50):
+        total = int(np.count_nonzero(np.asarray(_match_mask(ds, where, at_values))))
+        shown = f"{len(frame):,} of {total:,} matching points" if len(frame) < total else \
+            f"{total:,} matching points"
+        click.echo(shown, err=fmt != "table")
+
+
+def _match_mask(ds, where, at):
+    import numpy as np
+
+    from sweep.query import at_profile, evaluate
+
+    if not where:
+        return np.ones(ds["status"].shape, dtype=bool)
+    return evaluate(at_profile(ds, at), where).values
 
 
 @cli.command()

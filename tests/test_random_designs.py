@@ -401,3 +401,32 @@ def test_crank_rocker_corner_statuses_the_audit_reported(design, status):
         assert rk == 0.0 if design.get("sigma", "impact") == "impact" else math.isnan(rk)
     if status == "ok":
         assert out["restitution_kinematic"] == pytest.approx(-0.3, rel=1e-7)
+
+
+# ------------------------------------------------------------------- rotary pendulum
+
+@pytest.mark.parametrize("model", ["paper", "rigid", "rotor"])
+@pytest.mark.parametrize("tool", ["rotor_stop", "lab_window"])
+def test_pendulum_ok_rows_and_only_they_carry_values(model, tool):
+    """Issue 12 item 6: `no_impact` and `quasi_periodic` designs once carried status ok
+    with every value NaN, so a `status == "ok"` query returned rows of NaN. At random
+    designs of each model and tool (escapes, returns, blade patterns) a row is ok exactly
+    when its cycle values are finite; every other row has none of them (the frequency
+    ratio and period do not exist on the blade, where flights end on it)."""
+    from benchmarks.auto_cases import MECH, OUT, blade_points, points, run
+
+    seed = zlib.crc32(f"ok rows {model} {tool}".encode())
+    params = blade_points(model, 24, seed) if tool == "lab_window" else points(model, 24, seed)
+    if tool == "rotor_stop":  # push half of them past the escape threshold
+        params[[p.name for p in MECH.parameters].index("R")][::2] += 0.3
+    out, status = run(params, "auto", tol=1e-6)
+    values = ["amplitude", "impact_speed", "impact_interval", "acceleration_peak",
+              "rotor_speed_ratio", "error_estimate"]
+    if tool == "rotor_stop":
+        values += ["frequency_ratio", "period"]
+    finite = np.all([np.isfinite(out[OUT[v]]) for v in values], axis=0)
+    none = np.all([np.isnan(out[OUT[v]]) for v in values], axis=0)
+    ok = status == MECH.status_codes.ok
+    assert 0 < ok.sum() < len(ok)  # both kinds drawn
+    assert np.array_equal(ok, finite)
+    assert np.all(none[~ok])

@@ -11,9 +11,9 @@ C = namedtuple("CaseColumns", CASE_COLUMNS)(*range(len(CASE_COLUMNS)))
 #: cycle's period and whether it chatters, amplitude [rad], frequency ratio n, impact
 #: interval [rotor rad], striker normal speed at impact [omega1 l_contact], impacts to
 #: converge, peak |psi''| [omega1^2], R_crit, steps, rejected steps, events, mean rotor speed
-#: [omega1], method used
+#: [omega1], method used, estimated relative error of the cycle's values (auto)
 ROW_SLOTS = ("outcome", "period", "chatter", "amplitude", "frequency", "interval", "speed",
              "impacts", "acceleration", "restitution_critical", "steps", "rejected", "events",
-             "rotor_speed", "method")
+             "rotor_speed", "method", "error")
 ROW = namedtuple("RowSlots", ROW_SLOTS)(*range(len(ROW_SLOTS)))
 N_ROW = len(ROW_SLOTS)
