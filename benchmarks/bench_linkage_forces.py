@@ -39,7 +39,7 @@ def make_params(n, seed=2):
 
 
 def numpy_joint_forces(phi1, pr):
-    """Vector form of linkages.md §5.3 for arrays: phi1 (1, M), parameters as (N, 1)."""
+    """Vector form of docs/models.md §4.2 for arrays: phi1 (1, M), parameters as (N, 1)."""
     P = {name: pr[i][:, None] for name, i in kt.P._asdict().items()}
     l0, l1, l2, l3, sigma = P["l0"], P["l1"], P["l2"], P["l3"], P["sigma"]
     sh, ch = np.sin(0.5 * phi1), np.cos(0.5 * phi1)

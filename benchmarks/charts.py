@@ -10,7 +10,7 @@
 2. Loop closure near a special position (T1 lambda2 = 2, type a): relative error of u31
    against 60-digit mpmath, for the factored form and the papers' arccos form.
 3. Failure map: RK4 time-marching on the undamped balancer over (r, steps per revolution),
-   with RK4's stability edge (dynamics.md H7).
+   with RK4's stability edge (H7, docs/models.md §7.2).
 4. Work-precision of the balancer's steady state: Fourier over harmonic counts against RK4
    shooting over step counts.
 5. Failure map: grazing contacts missed by event detection over (step size, approach speed),
@@ -135,7 +135,7 @@ def loop_closure_near_node(path: Path):
     ax.invert_xaxis()
     _finish(fig, ax, path, "distance to the special position |dphi1| [rad]",
             "relative error of u31 vs 60-digit reference [-]",
-            "Loop closure near a special position (seed 000 Table 1, lambda2 = 2)")
+            "Loop closure near a special position (crank-rocker paper, Table 1, lambda2 = 2)")
 
 
 def balancer_failure_map(path: Path):

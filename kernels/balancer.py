@@ -1,4 +1,4 @@
-"""Leaf-spring balancer on the driven mass of a four-bar (seed 002; dynamics.md §2).
+"""Leaf-spring balancer on the driven mass of a four-bar ([BAL]; docs/models.md §6).
 
 Model (B4)/(B9), in the crank angle theta = omega t (' = d/dtheta):
     device:    f^2 g'' + 2 eta f g' + (1 + 1/r^2) g = gamma_s + gamma(theta)/r^2
@@ -25,7 +25,7 @@ NEUTRAL_HALF_SWING, NEUTRAL_MEAN = 0, 1
 
 DECLARATION = Mechanism(
     name="spring_balancer",
-    title="Leaf-spring balancer on a four-bar: steady state by Fourier series (seed 002)",
+    title="Leaf-spring balancer on a four-bar: steady state by Fourier series",
     summary="rocker motion from the loop closure, Fourier coefficients by rFFT once per "
             "geometry, steady state per harmonic in closed form, invariants by their own "
             "transfer functions, maxima over a revolution by dense sampling and Newton "
@@ -120,7 +120,7 @@ def _extreme(theta, l0, l1, l2, l3, sigma):
 def rocker_samples(l0, l1, l2, l3, sigma, n):
     """gamma(theta_j) = beta - min beta at theta_j = 2 pi j / n, and the swing gamma0.
 
-    The extremes are polished by Newton on u31 = 0, so gamma0 is exact (dynamics.md B-O1).
+    The extremes are polished by Newton on u31 = 0, so gamma0 is exact (B-O1, docs/models.md §7.2).
     Angles are unwrapped about beta(0): a rocker swings less than pi.
     """
     beta0 = rocker_angle(0.0, l0, l1, l2, l3, sigma)
@@ -257,7 +257,7 @@ def _gain(num_re, num_im, den_re, den_im):
 
 @njit(**KERNEL_OPTIONS)
 def _apply(gr, gi, a, b):
-    """The complex gain G = gr + i gi on a harmonic a cos + b sin (dynamics.md §2.5)."""
+    """The complex gain G = gr + i gi on a harmonic a cos + b sin (docs/models.md §6.2)."""
     return gr * a + gi * b, gr * b - gi * a
 
 
@@ -311,7 +311,7 @@ def choose_harmonics(a, b, f, r, eta, tol, forced):
 
 @njit(**KERNEL_OPTIONS)
 def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
-    """Metrics of dynamics.md §2.6 for one (f, r, eta): writes the outputs into out (rows O),
+    """Metrics of docs/models.md §6.3 for one (f, r, eta): writes the outputs into out (rows O),
     returns the status."""
     for k in range(out.shape[0]):
         out[k] = math.nan
@@ -352,7 +352,7 @@ def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
     if resonant:
         return S.resonance
     zr[0] = zi[0] = ir[0] = ii[0] = jr[0] = ji[0] = nr[0] = ni[0] = dr[0] = di[0] = 0.0
-    static_dev = (a[0] - gamma_s) * r * r / (1.0 + r * r)  # a0 - C0 (dynamics.md §2.5)
+    static_dev = (a[0] - gamma_s) * r * r / (1.0 + r * r)  # a0 - C0 (docs/models.md §6.2)
     # the five series on one grid, sharing the cos/sin recurrence, then refined peaks
     ns = max(32, 8 * m)
     vals = np.zeros((N_SERIES, ns))
@@ -487,7 +487,8 @@ def _setup(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device):
 @njit(**KERNEL_OPTIONS)
 def shooting(l0, l1, l2, l3, sigma, f, r, eta, gamma_s, device, steps):
     """Periodic steady state of (B4)/(B9) driven by the exact rocker motion, by shooting:
-    x0 = (I - Phi)^-1 x_p(2 pi) with fixed-step RK4 over one revolution (dynamics.md B-O6).
+    x0 = (I - Phi)^-1 x_p(2 pi) with fixed-step RK4 over one revolution (B-O6,
+    docs/models.md §7.2).
 
     Returns theta_j, g(theta_j), g''(theta_j) at steps + 1 points. Accurate when the step
     resolves the fastest mode sqrt(K)/f (H7); the periodic orbit of the discrete map exists

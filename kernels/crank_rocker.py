@@ -1,10 +1,10 @@
-"""Crank-rocker impact four-bars of seed 000: synthesis, branch values, Rk (linkages.md §2-3).
+"""Crank-rocker impact four-bars of [CR]: synthesis, branch values, Rk (docs/models.md §1-2).
 
 Everything here is closed form: the branch values at the special position come from the
-series expansion of §2.4 (equal to the Hessian roots of the node), never from sampling the
-loop closure near the node. Parameters arrive as rows of a float64 matrix in the order of
-the declaration (categories as the codes below, NaN = not given); outputs are written by
-name (``O.gamma``).
+series expansion of docs/models.md §1.5 (equal to the Hessian roots of the node), never
+from sampling the loop closure near the node. Parameters arrive as rows of a float64 matrix
+in the order of the declaration (categories as the codes below, NaN = not given); outputs
+are written by name (``O.gamma``).
 """
 
 import math
@@ -30,7 +30,7 @@ ROOT_SMALLER_BASE, ROOT_LARGER_BASE = 0, 1
 BOUND_ROUNDING = 64 * 2.220446049250313e-16
 _TYPES = ("a", "b", "c")
 _LINKS = ("largest_link", "lambda0", "lambda2", "lambda3")
-#: the ways each type may be given its geometry (seed 000's tables are indexed by the
+#: the ways each type may be given its geometry ([CR]'s tables are indexed by the
 #: type's largest link under its own name: lambda2 for a, lambda3 for b, lambda0 for c)
 _GEOMETRY = {
     "a": ({"largest_link"}, {"lambda2"}),
@@ -64,8 +64,8 @@ def _rules(given: dict) -> str | None:
 
 DECLARATION = Mechanism(
     name="crank_rocker",
-    title="Crank-rocker impact four-bar: synthesis and kinematic restitution (seed 000)",
-    summary="closed form: synthesis (seed 000 eqs. 10-11; the type-b quadratic derived "
+    title="Crank-rocker impact four-bar: synthesis and kinematic restitution",
+    summary="closed form: synthesis (the paper's eqs. 10-11; the type-b quadratic derived "
             "here), branch values at the node from its series expansion, full-turn test; "
             "no loop-closure sampling",
     references="Crank-rocker impact mechanisms with the largest connecting rod and the "
@@ -112,7 +112,7 @@ DECLARATION = Mechanism(
         Output("transfer_after", "1", "rocker transfer ratio leaving the special position",
                "u31(φ1*+0)"),
         Output("impact_transfer_ratio", "1", "magnitude of the transfer ratio at impact "
-               "(|u31(2 pi)| of seed 000's tables)", "|u31(2π)|"),
+               "(|u31(2 pi)| of the paper's tables)", "|u31(2π)|"),
         Output("impact_speed", "m s-1", "rocker tip speed at impact "
                "(|u31| |omega1| lambda3 l1)"),
         Output("crank_turns_fully", "1", "whether the crank can turn fully",
@@ -151,21 +151,21 @@ def gamma_from_restitution(r):
 
 @njit(**KERNEL_OPTIONS)
 def synthesize_largest_rod(lam2, r):
-    """Type a (eq. 10 of seed 000): given lambda2 and R, return (lambda0, lambda3)."""
+    """Type a (eq. 10 of [CR]): given lambda2 and R, return (lambda0, lambda3)."""
     g2 = gamma_from_restitution(r) ** 2
     return g2 * (lam2 + 1.0) / (g2 + lam2), lam2 * (lam2 + 1.0) / (g2 + lam2)
 
 
 @njit(**KERNEL_OPTIONS)
 def synthesize_largest_base(lam0, r):
-    """Type c (eq. 11 of seed 000): given lambda0 and R, return (lambda2, lambda3)."""
+    """Type c (eq. 11 of [CR]): given lambda0 and R, return (lambda2, lambda3)."""
     g2 = gamma_from_restitution(r) ** 2
     return g2 * (lam0 + 1.0) / (g2 + lam0), lam0 * (lam0 + 1.0) / (g2 + lam0)
 
 
 @njit(**KERNEL_OPTIONS)
 def synthesize_largest_rocker(lam3, r, larger_base):
-    """Type b (derived, linkages.md §3.1): lambda0, lambda2 are the roots of
+    """Type b (derived, docs/models.md §2.1): lambda0, lambda2 are the roots of
     t^2 - (1 + lambda3) t + gamma^2 lambda3 = 0. Returns (lambda0, lambda2), NaN if complex.
 
     The smaller root is taken from the product of the roots to avoid cancellation. A rocker
@@ -207,7 +207,8 @@ def synthesize_largest_rocker_from_base(lam0, r):
 
 @njit(**KERNEL_OPTIONS)
 def branch_values(kind, lam0, gamma, sigma, direction):
-    """One-sided transfer ratios (u31 before, u31 after) at the special position (§2.4).
+    """One-sided transfer ratios (u31 before, u31 after) at the special position
+    (docs/models.md §1.5).
 
     kind is CHANGE_POINT_A/B/C, gamma = sqrt(lambda0 lambda2/lambda3), sigma the assembly
     branch, direction the sign of omega1. From the series expansion:
@@ -261,7 +262,8 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
     direction = 1.0 if w > 0.0 else -1.0
     status = S.ok
     for _ in range(1):  # a single pass; "break" ends it early with the status set
-        # 1. geometry: echo, or synthesis with Rk = -R (seed 000 eqs. 10, 11; §3.1 for b)
+        # 1. geometry: echo, or synthesis with Rk = -R ([CR] eqs. 10, 11; for b
+        # docs/models.md §2.1)
         if kind_code == TYPE_A:
             lam2 = _given(big, lam2_in)
             lam0, lam3 = synthesize_largest_rod(lam2, r)
@@ -296,7 +298,8 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
         if kind == 0:
             kind = _first_identity(mask)
 
-        # 3. full-turn feasibility (§2.5) and transmission angles at the two dead centres;
+        # 3. full-turn feasibility (docs/models.md §1.6) and transmission angles at the two
+        # dead centres;
         # at a dead centre that is a change point all links are collinear: mu = 0 exactly
         # (evaluating it there would return sqrt(rounding) ~ 1e-8)
         turns = crank_turns_fully(lam0, 1.0, lam2, lam3, tol)

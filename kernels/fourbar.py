@@ -1,12 +1,12 @@
-"""Four-bar loop closure and transfer functions (linkages.md §2), shared by every mechanism.
+"""Four-bar loop closure and transfer functions (docs/models.md §1), shared by every mechanism.
 
-Notation (linkages.md §1): A = (0, 0) and D = (l0, 0); crank AB = l1 at angle phi1, coupler
+Notation (docs/models.md §1.1): A = (0, 0) and D = (l0, 0); crank AB = l1 at angle phi1, coupler
 BC = l2 at phi2, rocker DC = l3 at phi3; assembly branch sigma = +1/-1 with
 phi3 = theta_DB + sigma*psi.
 
-Everything is written in the cancellation-free factored form of §2.1: at a change point one
-factor of P or Q vanishes exactly and keeps its full relative accuracy, where the papers'
-arccos form loses half the digits (hard case H2).
+Everything is written in the cancellation-free factored form of docs/models.md §1.2: at a
+change point one factor of P or Q vanishes exactly and keeps its full relative accuracy,
+where the papers' arccos form loses half the digits (hard case H2).
 """
 
 import math
@@ -16,7 +16,7 @@ from numba import njit
 from kernels import KERNEL_OPTIONS
 from kernels.elementary import atan_fast
 
-#: identity bits of the three change-point families (linkages.md §2.4), l1 = 1
+#: identity bits of the three change-point families (docs/models.md §1.5), l1 = 1
 CHANGE_POINT_A = 1  # lambda0 + lambda3 = 1 + lambda2, node at (phi1, phi3) = (0, 0)
 CHANGE_POINT_B = 2  # lambda0 + lambda2 = 1 + lambda3, node at (0, pi)
 CHANGE_POINT_C = 4  # lambda0 + 1 = lambda2 + lambda3, node at (pi, pi)
@@ -28,7 +28,7 @@ B_ON_D = 1e-280
 
 @njit(**KERNEL_OPTIONS)
 def dyad_factors(phi1, l0, l1, l2, l3, snap=0.0):
-    """Squared distance d^2 = |DB|^2 and the closure factors P, Q of linkages.md §2.1.
+    """Squared distance d^2 = |DB|^2 and the closure factors P, Q of docs/models.md §1.2.
 
     P*Q = (2 l3 d sin psi)^2; the loop closes at phi1 iff P >= 0 and Q >= 0.
 
@@ -62,7 +62,7 @@ def dyad_factors_half(sh, ch, l0, l1, l2, l3, snap=0.0):
 
 @njit(**KERNEL_OPTIONS)
 def closure_vectors(sh, ch, l0, l1, l2, l3, sigma, snap=0.0):
-    """The loop closure (linkages.md §2.1) as unit vectors: the one solver of this package.
+    """The loop closure (docs/models.md §1.2) as unit vectors: the one solver of this package.
 
     From sh = sin(phi1/2), ch = cos(phi1/2): returns (c1, s1, c2, s2, c3, s3, d2, root) with
     (ci, si) = (cos, sin) of phi_i, d2 = |DB|^2 and root = sqrt(P Q); NaNs where the loop
@@ -112,7 +112,7 @@ def loop_closure(phi1, l0, l1, l2, l3, sigma, snap=0.0):
 
 @njit(**KERNEL_OPTIONS)
 def _stable_u31(c1, s1, d2, root, l0, l1, l2, l3, sigma):
-    """u31 = dtheta_DB/dphi1 + sigma dpsi/dphi1 (linkages.md §2.3); 0/0 = NaN at the node."""
+    """u31 = dtheta_DB/dphi1 + sigma dpsi/dphi1 (docs/models.md §1.4); 0/0 = NaN at the node."""
     if root == 0.0:
         return math.nan  # the node itself (H1), or a dead position of the dyad
     return (l1 * (l1 - l0 * c1) / d2
@@ -121,7 +121,7 @@ def _stable_u31(c1, s1, d2, root, l0, l1, l2, l3, sigma):
 
 @njit(**KERNEL_OPTIONS)
 def transfer_ratio(phi1, l0, l1, l2, l3, sigma, snap=0.0):
-    """Rocker transfer ratio u31 = dphi3/dphi1 in the stable closed form of linkages.md §2.3.
+    """Rocker transfer ratio u31 = dphi3/dphi1 in the stable closed form of docs/models.md §1.4.
 
     Exact to ~1e-15 away from a special position and to ~3e-8 at |dphi1| = 1e-8 from it;
     NaN exactly at the special position (0/0, hard case H1) and where the loop cannot close.
@@ -136,7 +136,7 @@ def transfer_ratio(phi1, l0, l1, l2, l3, sigma, snap=0.0):
 
 @njit(**KERNEL_OPTIONS)
 def vector_kinematics(phi1, l0, l1, l2, l3, sigma, snap=0.0):
-    """Unit vectors of the links and the transfer functions (linkages.md §2.2-2.3).
+    """Unit vectors of the links and the transfer functions (docs/models.md §1.3-1.4).
 
     Returns (c1, s1, c2, s2, c3, s3, u21, u31, u21', u31') with (ci, si) = (cos, sin) of
     phi_i and u'_k1 = d^2 phi_k/dphi1^2; NaNs where the loop cannot close. Angle
@@ -168,7 +168,7 @@ def transfer_functions(phi1, l0, l1, l2, l3, sigma, snap=0.0):
 
 @njit(**KERNEL_OPTIONS)
 def change_point_identities(lam0, lam2, lam3, tol):
-    """Bit mask of the change-point identities that hold (l1 = 1), linkages.md §2.4.
+    """Bit mask of the change-point identities that hold (l1 = 1), docs/models.md §1.5.
 
     Each identity is one way of splitting the four links into two pairs of equal sum (the
     Grashof defect s + l - p - q = 0); tol is relative to the sum of the links.
@@ -186,7 +186,7 @@ def change_point_identities(lam0, lam2, lam3, tol):
 
 @njit(**KERNEL_OPTIONS)
 def crank_turns_fully(l0, l1, l2, l3, tol):
-    """Link 1 turns fully iff l0 + l1 <= l2 + l3 and |l0 - l1| >= |l2 - l3| (§2.5).
+    """Link 1 turns fully iff l0 + l1 <= l2 + l3 and |l0 - l1| >= |l2 - l3| (docs/models.md §1.6).
 
     At a change point one inequality holds with equality, so it is tested with a tolerance
     relative to the sum of the links; otherwise rounding would decide feasibility.

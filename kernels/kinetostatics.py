@@ -1,12 +1,12 @@
-"""Kinetostatics of the impact four-bar and of GUIM-1's additional rocker (seed 001;
-linkages.md §5).
+"""Kinetostatics of the impact four-bar and of GUIM-1's additional rocker ([GUIM];
+docs/models.md §4).
 
-Per crank angle: the joint reactions by the Assur-dyad route of §5.3 (tangential parts from
-moments about C, normal parts from the dyad force balance, then the crank), and the balancing
-moment M_b. M_b is taken from virtual work (§5.5), which needs no reactions: the reaction
-route gives it as infinity times zero at a special position (H11), the virtual-work route stays
-finite and exact. Over a cycle: windowed peaks, the RMS of M_b and the cycle work by
-Gauss-Legendre quadrature (one-sided at the node, H13).
+Per crank angle: the joint reactions by the Assur-dyad route of docs/models.md §4.2
+(tangential parts from moments about C, normal parts from the dyad force balance, then the
+crank), and the balancing moment M_b. M_b is taken from virtual work (docs/models.md §4.2),
+which needs no reactions: the reaction route gives it as infinity times zero at a special
+position (H11), the virtual-work route stays finite and exact. Over a cycle: windowed peaks,
+the RMS of M_b and the cycle work by Gauss-Legendre quadrature (one-sided at the node, H13).
 
 GUIM-1 variant: the base (the main rocker) turns with angular velocity Omega_b and
 acceleration E_b about a pivot O, with A at r_OA in the base frame; absolute accelerations add
@@ -35,7 +35,7 @@ from kernels.fourbar import (
 
 BASE_FIXED, BASE_ROTATING = 0, 1
 
-# defaults: the kinetostatic test mechanism (seed 000 Table 1, lambda2 = 2.5, R = 0.3,
+# defaults: the kinetostatic test mechanism ([CR] Table 1, lambda2 = 2.5, R = 0.3,
 # crank 0.1 m, tilt 25 degrees, 30 rad/s), so that the example runs as it is
 _L1 = 0.1
 _L0, _L2, _L3 = 2.029159519725557 * _L1, 2.5 * _L1, 1.470840480274443 * _L1
@@ -45,7 +45,7 @@ _WINDOWED = "outside |phi1 - phi1*| < special_window at a special position"
 
 DECLARATION = Mechanism(
     name="linkage_forces",
-    title="Kinetostatics of the impact four-bar and GUIM-1's additional rocker (seed 001)",
+    title="Kinetostatics of the impact four-bar and GUIM-1's additional rocker",
     summary="Assur-dyad vector route for the reactions, balancing moment by virtual work, "
             "loop closure in factored form; cycle work and RMS by Gauss-Legendre on the "
             "open cycle, peaks from a uniform sample outside the special-position window "
@@ -80,7 +80,7 @@ DECLARATION = Mechanism(
         Quantity("epsilon1", "rad s-2", "crank angular acceleration (epsilon1)", "ε1",
                  default=0.0),
         Quantity("tilt", "rad", "inclination of the base AD to the horizontal (gamma + psi "
-                 "of seed 001)", "γ + ψ", default=math.radians(25.0), minimum=-math.pi,
+                 "of the paper)", "γ + ψ", default=math.radians(25.0), minimum=-math.pi,
                  maximum=math.pi),
         Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG),
         assembly_branch(),
@@ -198,7 +198,7 @@ def joint_forces(phi1, pr, sigma, res, snap=0.0):
 
 @njit(**KERNEL_OPTIONS)
 def _joint_forces(phi1, pr, sigma, res, snap, gx, gy):
-    """Joint reactions and balancing moment at crank angle phi1 (linkages.md §5.3).
+    """Joint reactions and balancing moment at crank angle phi1 (docs/models.md §4.2).
 
     pr holds one point's parameters (rows P of the declaration); res (length N_RESULT) gets the
     vectors F14, F21, F32, F34 (force on link i by link j, mechanism frame), M_b from virtual

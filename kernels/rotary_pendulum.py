@@ -1,4 +1,4 @@
-"""The rotary-pendulum impact mechanism (seed 004): its declaration and entry point.
+"""The rotary-pendulum impact mechanism ([RP]): its declaration and entry point.
 
 One steady state per distinct case (model, k, xi, kappa, R, tool, tool window, rotor
 parameters) of a block, then rescaled by omega1 and l2 (omega1 is only a time scale, P-O12).
@@ -50,8 +50,8 @@ def _rules(given: dict) -> str | None:
 
 DECLARATION = Mechanism(
     name="rotary_pendulum",
-    title="Rotary-pendulum impact mechanism: steady impact regime (seed 004)",
-    summary="closed form (auto): first integral of seed 004's equation, amplitude by Newton, "
+    title="Rotary-pendulum impact mechanism: steady impact regime",
+    summary="closed form (auto): first integral of the paper's equation, amplitude by Newton, "
             "half period by Gauss-Legendre, escape threshold v_crit, rigid pendulum by the "
             "AGM elliptic integral, affine impact map; or DOPRI5/RK4 with event location on "
             "the step interpolant (sign samples, extremum check) and Newton polishing on "
@@ -64,7 +64,7 @@ DECLARATION = Mechanism(
                "and Automation, National Academy of Sciences of the Kyrgyz Republic; the copy "
                "received gives no year",
     parameters=(
-        Quantity("model", "1", "pendulum model: seed 004's equation (paper), the physically "
+        Quantity("model", "1", "pendulum model: the paper's equation (paper), the physically "
                  "derived rigid pendulum at constant rotor speed (rigid), a rotor of finite "
                  "inertia with a linear motor law (rotor)", default="paper",
                  choices={"paper": MODEL_PAPER, "rigid": MODEL_RIGID, "rotor": MODEL_ROTOR}),

@@ -1,4 +1,4 @@
-"""Six-link impact mechanism with the largest rocker (seed 003; linkages.md §4).
+"""Six-link impact mechanism with the largest rocker ([SIX]; docs/models.md §3).
 
 Stage 1 is a double crank (base lambda6 = 1 - lambda2 + lambda3 over l1, the shortest link)
 with a special position at phi1* = 0. With no stop there, it follows the smooth analytic
@@ -10,7 +10,7 @@ motion shifted by one crank turn). Then u31 is continuous and at the node altern
 Stage 2 is an impact four-bar of type b driven by link 3 (crank angle phi3 + delta - beta
 relative to its base DE, lengths over l3: mu6 = 1 - mu4 + mu5). It keeps its branch: the
 impact reverses the rocker. The branch is the impact branch for the actual rotation direction
-of link 3, not seed 003's sigma = -1, which holds only for clockwise rotation (§4.2).
+of link 3, not [SIX]'s sigma = -1, which holds only for clockwise rotation (docs/models.md §3.2).
 Composition: u51 = u31 u53 and u'51 = u'31 u53 + u31^2 u'53.
 """
 
@@ -28,7 +28,7 @@ from kernels.fourbar import CHANGE_POINT_B, crank_turns_fully, vector_kinematics
 
 DECLARATION = Mechanism(
     name="six_link",
-    title="Six-link impact mechanism with alternating branch switching (seed 003)",
+    title="Six-link impact mechanism with alternating branch switching",
     summary="stage 1 on the smooth path through its node (branch alternation rule), stage 2 "
             "on the impact branch for the rotation direction; impacts by bisection on "
             "phi3(phi1); composition u51 = u31 u53; peaks from a uniform sample of the 4 pi "
@@ -133,7 +133,7 @@ def stage1(phi1, lam6, lam2, lam3, snap):
 
 @njit(**KERNEL_OPTIONS)
 def stage1_node_value(m, lam6, gamma1):
-    """u31 on the smooth path at the node phi1 = 2 pi m (closed form, §4.3)."""
+    """u31 on the smooth path at the node phi1 = 2 pi m (closed form, docs/models.md §3.3)."""
     sigma_before = stage1_branch(TWO_PI * m - 1.0)
     return (1.0 + sigma_before * gamma1) / (1.0 - lam6)
 
@@ -221,7 +221,8 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
         prof[j] = nan
     lam6 = 1.0 - lam2 + lam3
     mu6 = 1.0 - mu4 + mu5
-    # §4.1: stage 1 l1 < l3 < l2 with l2 - l3 < l1 (a drag link), stage 2 l3 < l4 < l5
+    # docs/models.md §3.1: stage 1 l1 < l3 < l2 with l2 - l3 < l1 (a drag link),
+    # stage 2 l3 < l4 < l5
     if not (1.0 < lam3 < lam2 and lam2 - lam3 < 1.0 and 1.0 < mu4 < mu5):
         return S.not_assemblable
     if not (crank_turns_fully(lam6, 1.0, lam2, lam3, tol)

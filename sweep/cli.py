@@ -1,4 +1,4 @@
-"""The ``sweep`` command line (atlas.md §4): run, examples, info, query, chart.
+"""The ``sweep`` command line (README, "The command line"): run, examples, info, query, chart.
 
 Exit status 0 on success, 2 on bad input (one line naming the field), 1 on a failure inside.
 """
@@ -218,8 +218,6 @@ def query(atlas_file, where, sort, descending, limit, columns, at, fmt):
     meanings, the table prints units under its header."""
     import json
 
-    import numpy as np
-
     from sweep.query import parse, select, units_of
 
     if where is not None:
@@ -247,20 +245,10 @@ def query(atlas_file, where, sort, descending, limit, columns, at, fmt):
                                             [f"[{u}]" if u else "" for u in units]])
         click.echo(frame.set_axis(header, axis=1).to_string(index=False))
     if fmt == "table" or (limit is None and len(frame) > 50):
-        total = int(np.count_nonzero(np.asarray(_match_mask(ds, where, at_values))))
+        total = frame.attrs["matched"]
         shown = f"{len(frame):,} of {total:,} matching points" if len(frame) < total else \
             f"{total:,} matching points"
         click.echo(shown, err=fmt != "table")
-
-
-def _match_mask(ds, where, at):
-    import numpy as np
-
-    from sweep.query import at_profile, evaluate
-
-    if not where:
-        return np.ones(ds["status"].shape, dtype=bool)
-    return evaluate(at_profile(ds, at), where).values
 
 
 @cli.command()

@@ -240,8 +240,10 @@ def select(ds: xr.Dataset, where: str | None, sort: str | None = None,
         names = flag_names(ds[c]) if c in ds.variables else None
         if names is not None:
             frame[c] = frame[c].map(lambda v: names.get(int(v), str(v)) if v == v else "")
+    matched = len(frame)
     if limit is not None:
         frame = frame.head(limit)
+    frame.attrs["matched"] = matched  # before --limit: what the table's footer reports
     return frame
 
 

@@ -1,4 +1,4 @@
-"""Leaf-spring balancer (seed 002; dynamics.md §2): oracles B-O1..B-O10, hard cases H7-H10,
+"""Leaf-spring balancer ([BAL]; docs/models.md §6): oracles B-O1..B-O10, hard cases H7-H10,
 and the paper's findings (Figs. 2-4) that hold, with the band edges that do not."""
 
 import math
@@ -158,7 +158,8 @@ def test_fig3_balancing_coefficient_at_f_1():
     rs = (0.4, 0.8, 1.0, 1.6)
     ks = [point(1.0, r, 0.02)[0]["balancing_coefficient"] for r in rs]
     assert ks == pytest.approx([_k_dense(1.0, r, 0.02) for r in rs], rel=1e-6)
-    # dynamics.md prints three significant figures: 1.32, 4.79, 71.6, 4.59. Our 71.545 prints
+    # The reproduction behind docs/models.md §6.4 printed three significant figures: 1.32, 4.79,
+    # 71.6, 4.59. Our 71.545 prints
     # as 71.5; a coarse-grid peak (71.553 at 90-180 samples per revolution) prints as 71.6
     assert [round(x, 2) for x in (ks[0], ks[1], ks[3])] == [1.32, 4.79, 4.59]
     assert ks[2] == pytest.approx(71.545, abs=1e-3)

@@ -1,5 +1,5 @@
-"""Crank-rocker impact four-bars (seed 000): oracles O1-O5 and hard cases H1, H6-H10 of
-linkages.md, the corrected Tables 1-2, and the audit of the printed tables."""
+"""Crank-rocker impact four-bars ([CR]): oracles O1-O5 and hard cases H1, H6-H10 of
+docs/models.md §7.1, the corrected Tables 1-2, and the audit of the printed tables."""
 
 import math
 from fractions import Fraction
@@ -31,7 +31,7 @@ def exact_base(lam0):
     return lam2, lam3, (1 + Fraction(13, 7)) / (l0 + 1)
 
 
-# (given, printed lambda3, printed lambda0, printed |u31(2pi)|) of seed 000 Table 1 (type a)
+# (given, printed lambda3, printed lambda0, printed |u31(2pi)|) of [CR] Table 1 (type a)
 TABLE1 = [(0.75, 0.313, 1.437, 6.532), (1.0, 0.450, 1.551, 5.190), (1.25, 0.599, 1.652, 4.385),
           (1.5, 0.758, 1.742, 3.850), (1.75, 0.926, 1.824, 3.466), (2.0, 1.100, 1.900, 3.176),
           (2.5, 1.472, 2.028, 2.778), (3.0, 1.846, 2.154, 2.488)]
@@ -57,7 +57,7 @@ def one_sided_limits(out, omega1):
 
 
 def hessian_roots(lam0, lam2, lam3, phi1, phi3):
-    """Slopes of the two smooth curves through the node (linkages.md §2.4), l1 = 1."""
+    """Slopes of the two smooth curves through the node (docs/models.md §1.5), l1 = 1."""
     c13 = math.cos(phi1 - phi3)
     f11 = 2 * lam0 * math.cos(phi1) + 2 * lam3 * c13
     f13 = -2 * lam3 * c13
@@ -278,7 +278,7 @@ def test_general_four_bar_without_change_point_and_double_crank():
     assert status == "no_special_position"
     assert out["crank_turns_fully"] == 1.0 and out["transmission_angle_min"] > 0.3
     out, status = crank_rocker_point(type="general", lambda0=0.7, lambda2=1.6, lambda3=1.3)
-    assert status == "no_impact"  # seed 003 stage 1: gamma < 1, link 3 keeps turning
+    assert status == "no_impact"  # [SIX] stage 1: gamma < 1, link 3 keeps turning
     assert 0 < out["restitution_kinematic"] < 1
 
 

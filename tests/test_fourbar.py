@@ -1,4 +1,4 @@
-"""Loop closure and transfer functions against independent methods (linkages.md §6, §7)."""
+"""Loop closure and transfer functions against independent methods (docs/models.md §7.1)."""
 
 import math
 
@@ -90,7 +90,7 @@ def test_O9_cycle_integral_of_u31():
     l0g, l1g, l2g, l3g = 3.0, 1.0, 3.6, 2.2  # generic crank-rocker: smooth, no node
     u = np.array([fb.transfer_ratio(p, l0g, l1g, l2g, l3g, 1.0) for p in phi])
     assert abs(np.trapezoid(u, phi)) < 1e-6
-    # double crank (seed 003 stage 1): link 3 turns once per crank turn, integral 2 pi
+    # double crank ([SIX] stage 1): link 3 turns once per crank turn, integral 2 pi
     phi = np.linspace(0.0, 2 * math.pi, 20001)[1:-1]
     u = np.array([fb.transfer_ratio(p, 0.7, 1.0, 1.6, 1.3, -1.0) for p in phi])
     assert abs(np.trapezoid(u, phi) - 2 * math.pi) < 1e-3 * 2 * math.pi * 3
@@ -108,7 +108,8 @@ def _naive_u31(phi1, lam0, lam2, lam3, sigma):
 
 
 def _u31_mp(phi1, lam0, lam2, lam3, sigma):
-    """The §2.3 closed form in 60-digit arithmetic with exact (rational) link ratios."""
+    """The closed form of docs/models.md §1.4 in 60-digit arithmetic with exact (rational)
+    link ratios."""
     with mpmath.workdps(60):
         p = mpmath.mpf(phi1)
         l0, l2, l3 = (mpmath.mpf(x) for x in (lam0, lam2, lam3))
@@ -142,7 +143,7 @@ def test_H1_transfer_ratio_is_nan_exactly_at_the_node_and_finite_beside_it():
 
 
 def test_H3_H4_node_of_the_double_crank_is_exact_at_phi1_zero():
-    # seed 003 formula (1) gives ~2.6e-8 (sgn(0)) or NaN (arccos(1+eps)); the truth is pi
+    # [SIX] formula (1) gives ~2.6e-8 (sgn(0)) or NaN (arccos(1+eps)); the truth is pi
     for sigma in (1.0, -1.0):
         phi2, phi3 = fb.loop_closure(0.0, 0.7, 1.0, 1.6, 1.3, sigma)
         assert abs(wrap(phi3 - math.pi)) < 1e-15
@@ -225,7 +226,7 @@ def test_vector_kinematics_equals_the_angle_route(geom, sigma):
 
 
 def _track(order, turns=4, h=4.1e-3, geom=(0.7, 1.0, 1.6, 1.3)):
-    """Continuation of phi3(phi1) through the node of seed 003's stage 1: at each step take
+    """Continuation of phi3(phi1) through the node of [SIX]'s stage 1: at each step take
     the root (of both branches) nearest a predictor of the given order. Returns the fraction
     of steps on the branch of the explicit alternation rule sigma = s0 (-1)^floor(phi1/2pi)."""
     phi = h / 2

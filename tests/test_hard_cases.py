@@ -1,4 +1,4 @@
-"""The hard cases of event-driven impact simulation (the dynamics notes' H3-H6, the located
+"""The hard cases of event-driven impact simulation (H3-H6 of docs/models.md §7.2, the located
 escape, the step budget, the step-size underflow) on every model x tool: on the core (one
 flight or one chatter, against a SciPy twin at rtol 1e-13, tests/pendulum_twins.py) and end
 to end (a design through the kernel, by its status).
@@ -204,11 +204,11 @@ def test_H3_a_grazing_contact_is_found(model, tool, eps):
 
 @pytest.mark.parametrize("model, tool", OFF_EQUILIBRIUM)
 def test_H6_a_chatter_accumulates_where_scipy_puts_it(model, tool):
-    """Bounces at R = 0.5 (0.8 on the test stop, from rest at -0.6: the dynamics notes'
-    H6 problem) shrink geometrically; once a bounce would leave slower than 1e-7 the
+    """Bounces at R = 0.5 (0.8 on the test stop, from rest at -0.6: the Zeno example of
+    docs/models.md §5.5) shrink geometrically; once a bounce would leave slower than 1e-7 the
     sequence ends at its accumulation point (the ballistic tail). SciPy, bounce by bounce,
     needs as many impacts and puts the accumulation at the same time. For the rigid model
-    on the stop the notes give 12.834839 (70 impacts to r v < 1e-7; 71 to v < 1e-7)."""
+    on the stop the accumulation time is 12.834839 (70 impacts to r v < 1e-7; 71 to v < 1e-7)."""
     twin = TWINS[model]
     data = tool_data(twin, tool)
     if tool == "relative_stop":

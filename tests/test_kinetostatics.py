@@ -1,4 +1,4 @@
-"""Kinetostatics (seed 001; linkages.md §5): oracles O13-O19 and hard cases H11, H13."""
+"""Kinetostatics ([GUIM]; docs/models.md §4): oracles O13-O19 and hard cases H11, H13."""
 
 import math
 
@@ -12,7 +12,7 @@ from kernels.declaration import SIGMA_IMPACT
 L1 = 0.1
 LAM0, LAM3 = 2.029159519725557, 1.470840480274443  # T1 lambda2 = 2.5 (type a, R = 0.3)
 
-# the kinetostatic test mechanism of linkages.md §5.4a
+# the kinetostatic test mechanism of docs/models.md §4.3
 BASE = dict(l0=LAM0 * L1, l1=L1, l2=2.5 * L1, l3=LAM3 * L1, m1=2.0, m2=3.0, m3=8.0,
             s1=0.05 / L1, s2=0.12 / (2.5 * L1), s3=0.11 / (LAM3 * L1), q1=0.01, q2=-0.02,
             q3=0.015, J1=2 * 0.1**2 / 12 + 0.001, J2=3 * 0.25**2 / 12,
@@ -207,7 +207,7 @@ def test_O17_cycle_work_equals_kinetic_energy_lost_at_impact():
     t_before = 2 * energy(mech, -1e-6)[0] - energy(mech, -2e-6)[0]
     work = out[kt.O.cycle_work, 0]
     assert work == pytest.approx(t_before - t_after, rel=1e-6)  # O17 asks 1e-5; we get 1e-8
-    assert work == pytest.approx(464.318298, rel=1e-6)  # linkages.md §5.5
+    assert work == pytest.approx(464.318298, rel=1e-6)  # docs/models.md §4.4
 
 
 def test_O17_smooth_crank_rocker_does_no_net_work():

@@ -1,4 +1,4 @@
-"""Rotary-pendulum impact mechanism (seed 004; dynamics.md §1): closed forms against the
+"""Rotary-pendulum impact mechanism ([RP]; docs/models.md §5): closed forms against the
 integrators, oracles P-O1..P-O13, the separatrix (H1, H2), the affine map (H13)."""
 
 import math
@@ -16,11 +16,11 @@ from tests import probes
 from tests.conftest import flag_words, kernel_point
 
 XI = 4.0
-# dynamics.md §1.6: the model values (A, n, max|psi''|/omega1^2) and the paper's Table 1
+# docs/models.md §5.1: the model values (A, n, max|psi''|/omega1^2) and the paper's Table 1
 MODEL = {1.0: (2.15268, 0.69967, 1.2734), 1.5: (1.91174, 1.00691, 2.2122),
          2.0: (1.79862, 1.25931, 3.4131), 2.5: (1.72373, 1.48959, 4.9196)}
 TABLE1 = {1.0: (2.170, 0.7004), 1.5: (1.920, 1.0109), 2.0: (1.792, 1.2566), 2.5: (1.724, 1.4948)}
-# seed 004 Table 2, max angular acceleration [1/s^2] at omega1 = 20..100 (OCR "2210(" = 22100)
+# [RP] Table 2, max angular acceleration [1/s^2] at omega1 = 20..100 (OCR "2210(" = 22100)
 TABLE2 = {1.0: (495, 2000, 4520, 8000, 12230), 1.5: (883, 2530, 7900, 14120, 22200),
           2.0: (1350, 5470, 12350, 22100, 33930), 2.5: (2000, 8000, 17300, 31500, 49700)}
 TYPO = (1.5, 40.0)  # printed 2530, the model gives 3540: a typo for 3530
@@ -87,7 +87,7 @@ def test_P_O6_affine_impact_map_fixed_point_and_contraction():
     assert 1 + k + v_star == pytest.approx(2 * (1 + k) / (1 - r), rel=1e-15)  # V*/(omega1 l2)
     count, escaped = pm.impacts_to_converge(k, r, pm.paper_critical_speed(k, XI), 1e-11)
     assert not escaped and count == math.ceil(math.log(1e-11) / math.log(r))  # ratio R
-    assert count == 16 or count == 17  # dynamics.md: 17 impacts to 1e-11
+    assert count == 16 or count == 17  # docs/models.md §5.4: 17 impacts to 1e-11
 
 
 @pytest.mark.parametrize("k, r_crit", [(1.0, 0.061), (1.5, 0.146), (2.0, 0.221), (2.5, 0.288)])
@@ -150,7 +150,7 @@ def test_just_off_the_separatrix_the_regime_follows_the_side(side):
 
 
 def test_physical_pendulum_never_returns_after_a_plastic_impact():
-    """dynamics.md §0 finding 2: kappa = xi/(1+xi) < (1+k)^2/(4k) for every k."""
+    """docs/models.md §5.2: kappa = xi/(1+xi) < (1+k)^2/(4k) for every k."""
     for k in (1.0, 1.5, 2.0, 2.5):
         out, status = dimensionless(model="rigid", k=k, kappa=XI / (1 + XI))
         assert status == "escape"
@@ -279,7 +279,7 @@ def test_P_O10_free_rotor_conserves_energy_and_angular_momentum():
 
 
 def test_P_O11_generalised_impact():
-    """Newton's law through the rotor's mass matrix (dynamics.md §1.3) on the rotor stop,
+    """Newton's law through the rotor's mass matrix (docs/models.md §5.3) on the rotor stop,
     J = (1 + k, 1) on (phi1', psi') with k = l1/l_contact; the mass matrix in l_cm units
     (k_cm = l1/l_cm = 2.5)."""
     k, xi, r = 2.5, 4.0, 0.3
@@ -316,7 +316,7 @@ def test_P_O11_generalised_impact():
 
 def test_rotor_model_tends_to_the_rigid_model_with_a_stiff_motor():
     """With a steep motor law the rotor keeps its speed and psi follows psi'' = -kappa k
-    sin psi, kappa = xi/(1 + xi) (dynamics.md §1.4: 1.2e-4 at j1 = 20, s_m = 1e6, tau =
+    sin psi, kappa = xi/(1 + xi) (docs/models.md §5.2: 1.2e-4 at j1 = 20, s_m = 1e6, tau =
     1.5)."""
     k, xi = 2.0, 4.0
     kappa = xi / (1 + xi)  # contact at the striker: k_cm = k

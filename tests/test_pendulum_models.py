@@ -1,4 +1,4 @@
-"""The rotor model (P8-P10, §1.3 impact) and the lab-fixed blade (§1.7, H11) of the
+"""The rotor model (P8-P10, docs/models.md §5.2-5.3) and the lab-fixed blade (§5.5, H11) of the
 rotary-pendulum mechanism, each against an independent SciPy implementation (DOP853 at
 rtol = atol = 1e-12, its own mass matrix and impact law, its own slide ODE)."""
 
@@ -134,10 +134,10 @@ def test_rotor_model_tends_to_the_rigid_model_as_inertia_and_motor_grow():
 
 
 @pytest.mark.parametrize("j1", [4.0, 16.0, 64.0, 1000.0])
-def test_rotor_with_contact_at_the_striker_escapes_as_dynamics_md_finds(j1):
-    """§1.4(c): with contact at the striker's centre (kappa = xi/(1+xi)) the pendulum goes
-    over the top after a plastic impact on a free rotor; k = 2.5 escapes. (Lighter rotors
-    are thrown back by the impact itself: degenerate, tested above.)"""
+def test_rotor_with_contact_at_the_striker_escapes_as_the_model_predicts(j1):
+    """docs/models.md §5.2: with contact at the striker's centre (kappa = xi/(1+xi)) the
+    pendulum goes over the top after a plastic impact on a free rotor; k = 2.5 escapes.
+    (Lighter rotors are thrown back by the impact itself: degenerate, tested above.)"""
     status, out = steady(model="rotor", k=2.5, rotor_inertia_ratio=j1, motor_slope=0.0)
     assert status == "escape" and out["regime"] == REG["escape"]
 

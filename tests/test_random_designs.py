@@ -295,7 +295,7 @@ def random_crank_rocker(rng):
             d["base_root"] = ["smaller", "larger"][rng.integers(2)]
     else:
         lam0, lam2 = rng.uniform(1.2, 6.0), rng.uniform(1.2, 6.0)
-        # one of the identities A, B, C (linkages.md 2.4), or none
+        # one of the identities A, B, C (docs/models.md §1.5), or none
         lam3 = [1 + lam2 - lam0, lam0 + lam2 - 1, lam0 + 1 - lam2,
                 rng.uniform(0.5, 6.0)][rng.integers(4)]
         d.update(lambda0=lam0, lambda2=lam2, lambda3=lam3)

@@ -1,4 +1,4 @@
-"""Six-link impact mechanism (seed 003; linkages.md §4): oracles O10-O12, hard cases H5,
+"""Six-link impact mechanism ([SIX]; docs/models.md §3): oracles O10-O12, hard cases H5,
 H6 (stage 2), H14, and the link-length conditions."""
 
 import math
@@ -115,7 +115,7 @@ def test_impact_values_are_the_composed_one_sided_limits():
 
 def test_H6_stage2_uses_the_impact_branch_for_the_rotation_direction():
     out, _, _ = run()
-    assert out["assembly_branch_stage2"] == 1.0  # not seed 003's sigma = -1 (clockwise only)
+    assert out["assembly_branch_stage2"] == 1.0  # not [SIX]'s sigma = -1 (clockwise only)
     assert -1 < out["restitution_kinematic"] < 0
     assert out["restitution_kinematic"] == pytest.approx(-0.046, abs=5e-4)
     back, _, _ = run(direction=-1)

@@ -44,6 +44,26 @@ def crossed(before, after, direction):
     return before > 0.0 >= after
 
 
+def make_bisection(rate):
+    """The sign-change search specialised to rate(s, data): ``turn(data, lo, hi,
+    start_positive, iterations) -> s``, where the rate, positive at lo iff start_positive,
+    changes sign in (lo, hi): bisection, keeping the half whose left end has the start's
+    sign. The one search for where an interpolant turns (an event function's extremum, the
+    monitored angle's turning point)."""
+
+    @njit(**INNER_OPTIONS)
+    def turn(data, lo, hi, start_positive, iterations):
+        for _ in range(iterations):
+            mid = 0.5 * (lo + hi)
+            if (rate(mid, data) > 0.0) == start_positive:
+                lo = mid
+            else:
+                hi = mid
+        return 0.5 * (lo + hi)
+
+    return turn
+
+
 def make_illinois(f):
     """The bracketing root finder specialised to f(x, data): ``root(data, lo, hi, flo, fhi,
     tol) -> (x, converged)`` by the Illinois variant of regula falsi, where flo and fhi
@@ -99,21 +119,18 @@ def make_locator(values, rates, directions, step):
     root_on_partial_steps = make_illinois(on_partial_step)
 
     @njit(**INLINE_OPTIONS)
-    def rate_on_interpolant(s, e, st, system):
+    def rate_on_interpolant(s, data):
+        e, st, system = data
         t, h, y0, f0, y1, f1 = st
         return rates(t + s, hermite(s, h, y0, f0, y1, f1),
                      hermite_slope(s, h, y0, f0, y1, f1), system)[e]
 
+    turn_on_interpolant = make_bisection(rate_on_interpolant)
+
     @njit(**INNER_OPTIONS)
     def extremum(e, lo, hi, up, st, system):
-        """Where g_e turns in (lo, hi) (g' from + to - for a maximum), by bisection."""
-        for _ in range(BISECTIONS):
-            mid = 0.5 * (lo + hi)
-            if (rate_on_interpolant(mid, e, st, system) > 0.0) == up:
-                lo = mid
-            else:
-                hi = mid
-        return 0.5 * (lo + hi)
+        """Where g_e turns in (lo, hi) (g' from + to - for a maximum)."""
+        return turn_on_interpolant((e, st, system), lo, hi, up, BISECTIONS)
 
     @njit(**INNER_OPTIONS)
     def first_crossing(e, g, r, st, context):

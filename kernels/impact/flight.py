@@ -28,7 +28,7 @@ from numba import njit
 
 from kernels import INNER_OPTIONS
 from kernels.extrema import peak_search
-from kernels.impact.events import make_locator
+from kernels.impact.events import make_bisection, make_locator
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW, Counters)
 from kernels.impact.runge_kutta import (accepted_step_size, ballistic_cap, initial_step,
@@ -80,20 +80,18 @@ def make_flight(system):
         return s, ys, fs
 
     @njit(**INNER_OPTIONS)
+    def angle_rate_on_interpolant(s, st):
+        t, h, y, f, y1, f1 = st
+        return monitor(t + s, hermite(s, h, y, f, y1, f1), hermite_slope(s, h, y, f, y1, f1))[1]
+
+    turn_of_angle = make_bisection(angle_rate_on_interpolant)
+
+    @njit(**INNER_OPTIONS)
     def turning_angle(t, h, y, f, y1, f1, p, settings):
         """The monitored angle where its rate vanishes inside a step: bisection on the
         interpolant's rate, then Newton on exact partial steps."""
-        lo, hi = 0.0, h
-        negative = monitor(t, y, f)[1] < 0.0
-        for _ in range(TURNING_BISECTIONS):
-            mid = 0.5 * (lo + hi)
-            rate = monitor(t + mid, hermite(mid, h, y, f, y1, f1),
-                           hermite_slope(mid, h, y, f, y1, f1))[1]
-            if (rate < 0.0) == negative:
-                lo = mid
-            else:
-                hi = mid
-        s = 0.5 * (lo + hi)
+        s = turn_of_angle((t, h, y, f, y1, f1), 0.0, h, monitor(t, y, f)[1] > 0.0,
+                          TURNING_BISECTIONS)
         for _ in range(POLISH_ITERATIONS):
             ys, fs, _ = step(settings.method, y, f, s, p, 1.0, 1.0)
             angle, rate, accel = monitor(t + s, ys, fs)

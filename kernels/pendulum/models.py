@@ -4,7 +4,7 @@ Time is the rotor angle at nominal speed, tau = omega1 t (' = d/dtau); psi is th
 angle relative to the rotor (psi = 0: the striker radially outward). Three models, each a
 ``Model`` of functions for the tools and the integration core:
 
-- paper (seed 004's equation, P1-P2): psi'' = -a(psi) (psi'^2 + xi) sin psi,
+- paper ([RP]'s equation, P1-P2): psi'' = -a(psi) (psi'^2 + xi) sin psi,
   a = k X/(1 + xi X), X = k^2 + 1 + 2 k cos psi; state (psi, psi'); p = (k, xi);
 - rigid (the physically derived pendulum at constant rotor speed, P5):
   psi'' = -kappa k sin psi; state (psi, psi'); p = (k, kappa);
@@ -41,7 +41,7 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(96)  # for the half-period quadra
 
 @njit(**KERNEL_OPTIONS)
 def paper_acceleration(psi, dpsi, k, xi):
-    """psi'' of seed 004's equation (P1-P2)."""
+    """psi'' of [RP]'s equation (P1-P2)."""
     x = k * k + 1.0 + 2.0 * k * math.cos(psi)
     return -k * x / (1.0 + xi * x) * (dpsi * dpsi + xi) * math.sin(psi)
 

@@ -10,7 +10,7 @@ rotor speed: at constant rotor speed psi'+ = -(1 + k)(1 + R) - R psi'- (the pape
 Escape: psi falling through -pi (the pendulum goes over the top). Data: (0, k), the stop's
 angle and k.
 
-lab_window (a blade fixed in the frame, dynamics.md §1.7, H11): the contact point is at
+lab_window (a blade fixed in the frame, docs/models.md §5.5, H11): the contact point is at
 radius rho = sqrt(X), X = k^2 + 1 + 2k cos psi, and at the polar angle G = phi1 + beta(psi),
 beta = atan2(sin psi, k + cos psi); the blade is radial at lab angle 0 (mod 2 pi) and
 reaches in down to the striker's radius at |psi| = window. The gap is G against the blade's
