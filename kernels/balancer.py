@@ -61,7 +61,7 @@ DECLARATION = Mechanism(
         Output("moment_invariant_peak_balanced", "rad", "peak unbalanced-moment invariant "
                "with the balancer (M_zr,max)", "M_zr,max"),
         Output("balancing_coefficient", "1", "balancing coefficient K = M_i,max / M_zr,max",
-               "K"),
+               "K", marks=((1.0, "K = 1: the balancer stops helping"),)),
         Output("dynamic_coefficient_free", "1", "dynamic coefficient without the balancer "
                "(K_d)", "K_d"),
         Output("dynamic_coefficient_balanced", "1", "dynamic coefficient with the balancer "

@@ -89,6 +89,8 @@ class Output:
     ``flag_values``/``flag_meanings``; where the kernel writes NaN it gets the code of the
     meaning ``undetermined``. ``echoes`` names a parameter this output only repeats when that
     parameter is given (a grid axis then carries it: no data variable collides with it).
+    ``marks``: (value, meaning) pairs a design chart draws as labelled lines, the levels a
+    designer reads the output against (K = 1, where a balancer stops helping).
     """
 
     name: str
@@ -99,6 +101,7 @@ class Output:
     flags: dict | None = None
     undetermined: str | None = None
     echoes: str | None = None
+    marks: tuple = ()
 
     @property
     def is_flag(self) -> bool:

@@ -119,6 +119,9 @@ DECLARATION = Mechanism(
         Output("cycle_work", "J", "work of the balancing moment per cycle (integral of M_b "
                "dphi1 along the motion)", "∮M_b dφ1", "equals the kinetic energy lost at "
                "impact for constant omega1 on the impact branch"),
+        Output("special_crank_angle", "rad", "crank angle of the special position at which "
+               "the cycle starts (the impact node phi1*); a second one, where the linkage "
+               "has two, lies pi later", "φ1*"),
         Output("assembly_branch", "1", "assembly branch used (sigma)", "σ",
                flags=BRANCH_FLAGS, undetermined="undetermined"),
     ),
@@ -381,6 +384,8 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     if kind != 0 and kind != CHANGE_POINT_C and abs(l0 - l1) <= tol * (l0 + l1 + l2 + l3):
         return S.degenerate
     start = math.pi if kind == CHANGE_POINT_C else 0.0  # cycle (phi1*, phi1* + 2 pi)
+    if kind != 0:
+        out[O.special_crank_angle] = start
     gx, gy = -pr[P.g] * math.sin(pr[P.tilt]), -pr[P.g] * math.cos(pr[P.tilt])  # base frame
 
     # cycle work and RMS of M_b: Gauss-Legendre on each open piece between special

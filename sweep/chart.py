@@ -1,105 +1,327 @@
-"""Design charts from an atlas: matplotlib PNG with units on the axes and colour bar."""
+"""Design charts from an atlas: matplotlib PNG with units on the axes and colour bar.
+
+A numeric output is a colour map with contour lines and the output's marked levels (K = 1);
+a flag output (``regime``, ``status``) is drawn as categories with its meanings in a legend.
+Cells without a design value are not left white: they are drawn in greys, one per status,
+named in the legend. Angles are drawn in degrees unless asked otherwise; the atlas stays in
+radians.
+"""
 
 from __future__ import annotations
 
 import platform
 import textwrap
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import xarray as xr
 
 from sweep.errors import UserError
 
+#: panels per row of a chart with one panel per value of another axis
+PANELS_PER_ROW = 3
+#: the categories' colours (a qualitative map), and the greys of cells without a value
+CATEGORY_COLOURS = ("#4e79a7", "#f28e2b", "#59a14f", "#e15759", "#b07aa1", "#edc948",
+                    "#76b7b2", "#ff9da7", "#9c755f", "#bab0ac")
+BLANK_GREYS = ("0.86", "0.72", "0.58", "0.93", "0.65", "0.79")
 
-def _label(ds: xr.Dataset, name: str) -> str:
-    attrs = ds[name].attrs
-    units = attrs.get("units", "")
-    units = "-" if units in ("1", "") else units
-    long_name = textwrap.fill(attrs.get("long_name", name), 48)
-    return f"{name} [{units}]\n{long_name}"
+
+class Drawn(NamedTuple):
+    """What a design chart shows, read back from the figure (for the CLI and the tests)."""
+
+    path: Path
+    legend: list[str]
+    panel_titles: list[str]
+    rows: int
+    columns: int
+    xlabel: str
+    ylabel: str
+    xscale: str
+    yscale: str
+    xticks: list[str]
+    yticks: list[str]
+    colour_bar: bool
+
+
+def _units(ds: xr.Dataset, name: str, degrees: bool) -> str:
+    units = ds[name].attrs.get("units", "")
+    if degrees and units == "rad":
+        return "deg"
+    return "-" if units in ("1", "") else units
+
+
+def _label(ds: xr.Dataset, name: str, degrees: bool = False) -> str:
+    long_name = textwrap.fill(ds[name].attrs.get("long_name", name), 48)
+    return f"{name} [{_units(ds, name, degrees)}]\n{long_name}"
+
+
+def _shown(var: xr.DataArray, degrees: bool) -> np.ndarray:
+    """A variable's values as drawn: radians in degrees when asked."""
+    values = np.asarray(var.values)
+    if degrees and var.attrs.get("units") == "rad":
+        return np.degrees(values)
+    return values
+
+
+def _log_spaced(values: np.ndarray) -> bool:
+    return (values.size > 2 and values.dtype.kind == "f" and bool(np.all(values > 0))
+            and values[-1] / values[0] > 5
+            and bool(np.allclose(np.diff(np.log(values)), np.log(values[1] / values[0]))))
+
+
+def _plain_log_axis(axis) -> None:
+    """Log-axis ticks written as numbers (30, not 3x10^1)."""
+    import matplotlib.ticker as ticker
+
+    axis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(ticker.FuncFormatter(
+        lambda v, _: f"{v:g}" if round(v / 10 ** np.floor(np.log10(v))) in (2, 5) else ""))
+
+
+def _number(value: float) -> str:
+    """A contour label as a plain number: 10000, not 1e+04."""
+    text = f"{value:.3g}"
+    return f"{value:,.0f}" if "e+" in text else text
+
+
+def flag_table(var: xr.DataArray) -> dict[int, str]:
+    """Code -> meaning of a flag variable."""
+    codes = np.atleast_1d(var.attrs["flag_values"]).astype(int)
+    return dict(zip(codes.tolist(), var.attrs["flag_meanings"].split()))
+
+
+def _marks(ds: xr.Dataset, name: str) -> tuple:
+    """The declared (value, meaning) levels of an output (from the mechanism's declaration)."""
+    from sweep import registry
+
+    mech = ds.attrs.get("mechanism", "")
+    if mech not in registry.names():
+        return ()
+    try:
+        return registry.get(mech).declaration.output(name).marks
+    except KeyError:
+        return ()
+
+
+def select_slices(ds: xr.Dataset, at: dict | None) -> tuple[xr.Dataset, str]:
+    """The atlas at the nearest value of each grid axis in ``at`` ({axis: (value, unit)}),
+    and a caption of what was chosen."""
+    chosen = []
+    for dim, (value, unit) in (at or {}).items():
+        if dim not in ds["status"].dims:
+            raise UserError(f"at: {dim!r} is not a grid axis of this atlas; allowed: "
+                            + ", ".join(map(str, ds["status"].dims)))
+        axis = ds[dim]
+        if axis.dtype.kind not in "fiu":
+            raise UserError(f"at: {dim} is categorical; its values are drawn as panels")
+        units = axis.attrs.get("units", "")
+        if unit == "deg":
+            if units != "rad":
+                raise UserError(f"at: {dim} is in {units or 'no units'}, not an angle in rad")
+            value = np.radians(value)
+        ds = ds.sel({dim: value}, method="nearest").expand_dims(dim)
+        shown = float(ds[dim].values[0])
+        chosen.append(f"{dim} = {shown:.6g}" + ("" if units in ("", "1") else f" {units}"))
+    return ds, ", ".join(chosen)
+
+
+def _panel_title(ds: xr.Dataset, dim: str, k: int, degrees: bool) -> str:
+    value = ds[dim].values[k]
+    if isinstance(value, bytes):
+        value = value.decode()
+    if isinstance(value, str):
+        return f"{dim} = {value}"
+    units = _units(ds, dim, degrees)
+    shown = np.degrees(value) if units == "deg" else value
+    return f"{dim} = {shown:.6g}" + ("" if units == "-" else f" {units}")
 
 
 def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
-                 ok_only: bool = True) -> Path:
-    """Colour map of ``color`` over (x, y), one panel per value of each other grid axis
-    of more than one value (categories such as ``type``); non-ok points are left blank."""
+                 ok_only: bool = True, degrees: bool = True, at: dict | None = None) -> Path:
+    """Chart of ``color`` over (x, y), one panel per value of the other grid axis of more than
+    one value (at most three panels a row). ``ok_only``: cells whose status has no design
+    values are drawn as their status, not as a value; ``degrees``: angles in degrees;
+    ``at``: take other grid axes at one value ({axis: (value, "" or "deg")})."""
     import matplotlib
-    import matplotlib.ticker
+    import matplotlib.colors as mcolors
+    import matplotlib.ticker as ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+
+    from sweep.metadata import usable_mask
 
     for axis, name in (("x", x), ("y", y), ("color", color)):
         if name not in ds.variables:
             raise UserError(f"{axis}: unknown variable {name!r}; allowed: "
                             + ", ".join(sorted(map(str, ds.variables))))
+    grid_dims = list(ds["status"].dims)
+    if any(d not in grid_dims for d in ds[color].dims):
+        raise UserError(f"color: {color!r} is a profile; chart it with `sweep profile`, or "
+                        "`sweep query --at` for its value at one angle")
     if ds[color].dtype.kind in "OUS":
-        raise UserError(f"color: {color!r} is categorical; pick a numeric variable")
-    dims = list(ds["status"].dims)
-    facet_dims = [d for d in dims if d not in (x, y) and ds.sizes[d] > 1]
+        raise UserError(f"color: {color!r} is categorical; pick a numeric or flag variable")
+    ds, chosen = select_slices(ds, at)
+    facet_dims = [d for d in grid_dims if d not in (x, y) and ds.sizes[d] > 1]
     if len(facet_dims) > 1:
         raise UserError(f"chart: more than one other axis to panel over ({', '.join(facet_dims)});"
-                        " select a slice first")
+                        " take one at a value with --at AXIS=VALUE")
     panels = [None] if not facet_dims else list(range(ds.sizes[facet_dims[0]]))
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels) + 1.2, 4.4),
+    n_cols = min(len(panels), PANELS_PER_ROW)
+    n_rows = -(-len(panels) // n_cols)
+    fig, axes = plt.subplots(n_rows, n_cols, figsize=(4.6 * n_cols + 1.8, 4.2 * n_rows + 0.9),
                              squeeze=False, constrained_layout=True)
-    from sweep.metadata import usable_mask
-
-    values = ds[color].where(usable_mask(ds)) if ok_only else ds[color]
-    finite = np.asarray(values.values)[np.isfinite(np.asarray(values.values, dtype=float))]
-    vmin, vmax = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
-    # values spanning decades (transfer ratios, speeds) read better on a log colour scale
-    norm = (matplotlib.colors.LogNorm(vmin=vmin, vmax=vmax)
-            if finite.size and vmin > 0 and vmax / vmin > 20 else
-            matplotlib.colors.Normalize(vmin=vmin, vmax=vmax))
-    if isinstance(norm, matplotlib.colors.LogNorm):
-        levels = matplotlib.ticker.LogLocator(subs=(1.0, 2.0, 5.0)).tick_values(vmin, vmax)
+    var = ds[color]
+    status = ds["status"]
+    status_names = flag_table(status)
+    is_flag = "flag_meanings" in var.attrs
+    if is_flag:
+        names = flag_table(var)
+        present = sorted(int(c) for c in np.unique(var.values) if int(c) in names)
+        index = {code: i for i, code in enumerate(present)}
+        cmap = mcolors.ListedColormap([CATEGORY_COLOURS[i % len(CATEGORY_COLOURS)]
+                                       for i in range(len(present))])
+        norm = mcolors.BoundaryNorm(np.arange(len(present) + 1) - 0.5, len(present))
+        shown = np.vectorize(lambda c: index.get(int(c), np.nan), otypes=[float])(var.values)
+        has_value = np.ones(var.shape, bool)
     else:
-        levels = matplotlib.ticker.MaxNLocator(8).tick_values(vmin, vmax)
-    levels = levels[(levels > vmin) & (levels < vmax)]
+        shown = _shown(var, degrees).astype(float)
+        usable = usable_mask(ds).values if ok_only else np.ones(var.shape, bool)
+        has_value = usable & np.isfinite(shown)
+        shown = np.where(has_value, shown, np.nan)
+        finite = shown[has_value]
+        vmin, vmax = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
+        # values spanning decades (transfer ratios, speeds) read better on a log colour scale
+        log_colour = finite.size and vmin > 0 and vmax / vmin > 20
+        norm = (mcolors.LogNorm(vmin=vmin, vmax=vmax) if log_colour
+                else mcolors.Normalize(vmin=vmin, vmax=vmax))
+        cmap = matplotlib.colormaps["viridis"]
+        locator = (ticker.LogLocator(subs=(1.0, 2.0, 5.0)) if log_colour
+                   else ticker.MaxNLocator(6))
+        levels = locator.tick_values(vmin, vmax)
+        levels = levels[(levels > vmin) & (levels < vmax)]
+        marks = _marks(ds, color)
+        levels = levels[~np.isin(levels, [value for value, _ in marks])]  # drawn as marks
+        labelled = (levels[np.isclose(np.log10(levels), np.round(np.log10(levels)))]
+                    if log_colour else levels[::2])
+    shown = xr.DataArray(shown, dims=var.dims)
+    # cells without a value, drawn as their status (greys), each named in the legend
+    blank_codes = np.where(has_value, -1, status.transpose(*var.dims).values
+                           if set(var.dims) == set(status.dims) else -1)
+    blank_present = [int(c) for c in np.unique(blank_codes) if c >= 0]
+    grey_of = {c: BLANK_GREYS[i % len(BLANK_GREYS)] for i, c in enumerate(blank_present)}
+    blank_index = xr.DataArray(np.vectorize(lambda c: blank_present.index(int(c))
+                                            if c >= 0 else np.nan, otypes=[float])(blank_codes)
+                               if blank_present else np.full(var.shape, np.nan), dims=var.dims)
+    grey_map = mcolors.ListedColormap([grey_of[c] for c in blank_present] or ["1.0"])
+    grey_norm = mcolors.BoundaryNorm(np.arange(max(len(blank_present), 1) + 1) - 0.5,
+                                     max(len(blank_present), 1))
+    if is_flag:
+        marks = ()
+    x_values, y_values = _shown(ds[x], degrees), _shown(ds[y], degrees)
     mesh = None
-    for ax, k in zip(axes[0], panels):
-        sub = ds if k is None else ds.isel({facet_dims[0]: k})
-        val = values if k is None else values.isel({facet_dims[0]: k})
-        sub = sub.squeeze(drop=False)
-        val = val.squeeze(drop=False)
-        if x in sub.dims and y in sub.dims:
+    for ax, k in zip(axes.ravel(), panels):
+        pick = {} if k is None else {facet_dims[0]: k}
+        val = shown.isel(pick) if pick else shown
+        blank = blank_index.isel(pick) if pick else blank_index
+        others = [d for d in val.dims if d not in (x, y)]
+        val, blank = val.squeeze(others, drop=True), blank.squeeze(others, drop=True)
+        if x in val.dims and y in val.dims:
             grid = val.transpose(y, x).values
-            mesh = ax.pcolormesh(sub[x].values, sub[y].values, grid, norm=norm,
-                                 shading="nearest", cmap="viridis")
-            if np.isfinite(grid).sum() > 4 and len(levels):
-                lines = ax.contour(sub[x].values, sub[y].values, grid, levels=levels,
-                                   norm=norm, colors="white", linewidths=0.6)
-                ax.clabel(lines, fontsize=7, fmt="%.3g")
+            ax.pcolormesh(x_values, y_values, blank.transpose(y, x).values, cmap=grey_map,
+                          norm=grey_norm, shading="nearest")
+            mesh = ax.pcolormesh(x_values, y_values, grid, norm=norm, cmap=cmap,
+                                 shading="nearest")
+            if not is_flag and np.isfinite(grid).sum() > 4:
+                if len(levels):
+                    lines = ax.contour(x_values, y_values, grid, levels=levels, norm=norm,
+                                       colors="white", linewidths=0.6)
+                    # decades (log) or every other level labelled: labels do not pile up
+                    ax.clabel(lines, labelled, fontsize=7, fmt=_number, inline_spacing=2)
+                for value, meaning in marks:
+                    if np.nanmin(grid) < value < np.nanmax(grid):
+                        mark = ax.contour(x_values, y_values, grid, levels=[value],
+                                          colors="#d62728", linewidths=1.6, linestyles="--")
+                        ax.clabel(mark, fmt={value: meaning.split(":")[0]}, fontsize=8)
         else:
-            xs = sub[x].broadcast_like(val).values.ravel()
-            ys = sub[y].broadcast_like(val).values.ravel()
-            mesh = ax.scatter(xs, ys, c=val.values.ravel(), norm=norm, s=8, cmap="viridis")
-        ax.set_facecolor("0.9")
-        ax.set_xlabel(_label(ds, x))
-        ax.set_ylabel(_label(ds, y))
+            xs = _shown(ds[x].broadcast_like(ds[color].isel(pick)), degrees).ravel()
+            ys = _shown(ds[y].broadcast_like(ds[color].isel(pick)), degrees).ravel()
+            mesh = ax.scatter(xs, ys, c=val.values.ravel(), norm=norm, s=8, cmap=cmap)
+        ax.set_xlabel(_label(ds, x, degrees))
+        ax.set_ylabel(_label(ds, y, degrees))
         if k is not None:
-            ax.set_title(f"{facet_dims[0]} = {ds[facet_dims[0]].values[k]}")
-        if y in ds.dims and ds[y].size > 2:
-            yv = ds[y].values
-            if np.all(yv > 0) and yv[-1] / yv[0] > 5 and np.allclose(np.diff(np.log(yv)),
-                                                                      np.log(yv[1] / yv[0])):
-                ax.set_yscale("log")
-    bar = fig.colorbar(mesh, ax=axes[0].tolist())
-    bar.set_label(_label(ds, color))
-    fig.suptitle(f"{ds.attrs.get('title', '')}\nblank: no design value (status); "
-                 f"made on {platform.node() or 'unknown host'} ({platform.machine()})",
-                 fontsize=8)
+            ax.set_title(_panel_title(ds, facet_dims[0], k, degrees), fontsize=9)
+        for name, values, axis, scale in ((x, x_values, ax.xaxis, ax.set_xscale),
+                                          (y, y_values, ax.yaxis, ax.set_yscale)):
+            if name in ds.dims and _log_spaced(np.asarray(values)):
+                scale("log")
+                _plain_log_axis(axis)
+    for ax in axes.ravel()[len(panels):]:
+        ax.set_visible(False)
+    handles = []
+    if is_flag:
+        handles += [Patch(color=CATEGORY_COLOURS[i % len(CATEGORY_COLOURS)], label=names[c])
+                    for c, i in index.items()]
+    else:
+        bar = fig.colorbar(mesh, ax=axes.ravel().tolist(), shrink=0.9)
+        bar.set_label(_label(ds, color, degrees))
+        if isinstance(norm, mcolors.LogNorm):
+            _plain_log_axis(bar.ax.yaxis)
+        for value, meaning in marks:
+            if norm.vmin < value < norm.vmax:
+                bar.ax.axhline(value, color="#d62728", lw=1.6, ls="--")
+                handles.append(plt.Line2D([], [], color="#d62728", lw=1.6, ls="--",
+                                          label=meaning))
+    counts = {c: int((blank_codes == c).sum()) for c in blank_present}
+    handles += [Patch(color=grey_of[c], label=f"no {color} value: {status_names.get(c, c)} "
+                                             f"({counts[c]:,} points)")
+                for c in blank_present]
+    if handles:
+        fig.legend(handles=handles, loc="outside lower center", fontsize=8,
+                   ncols=min(len(handles), 3), title=(f"{color}: {var.attrs.get('long_name')}"
+                                                      if is_flag else None),
+                   title_fontsize=8)
+    caption = ds.attrs.get("title", "")
+    if chosen:
+        caption += f"\nat {chosen}"
+    caption += f"\nmade on {platform.node() or 'unknown host'} ({platform.machine()})"
+    fig.suptitle(caption, fontsize=8)
     fig.savefig(out, dpi=110)
+    used = [ax for ax in axes.ravel() if ax.get_visible()]
+    fig.canvas.draw()
+    drawn = Drawn(out, [h.get_label() for h in handles], [ax.get_title() for ax in used],
+                  n_rows, n_cols, used[0].get_xlabel(), used[0].get_ylabel(),
+                  used[0].get_xscale(), used[0].get_yscale(),
+                  [t.get_text() for t in used[0].get_xticklabels() if t.get_text()],
+                  [t.get_text() for t in used[0].get_yticklabels() if t.get_text()],
+                  not is_flag)
     plt.close(fig)
-    return out
+    return drawn
 
 
-def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path) -> tuple:
+def _angle_ticks(ax, degrees: bool, lo: float, hi: float) -> None:
+    """Crank-angle ticks at multiples of 90° (pi/2)."""
+    import matplotlib.ticker as ticker
+
+    if degrees:
+        ax.xaxis.set_major_locator(ticker.MultipleLocator(90))
+        ax.xaxis.set_minor_locator(ticker.MultipleLocator(30))
+        return
+    ax.xaxis.set_major_locator(ticker.MultipleLocator(np.pi / 2))
+    names = {0: "0", 1: "π/2", 2: "π", 3: "3π/2", 4: "2π"}
+    ax.xaxis.set_major_formatter(ticker.FuncFormatter(
+        lambda v, _: names.get(int(round(2 * v / np.pi)), f"{2 * v / np.pi:g}π/2")
+        if abs(2 * v / np.pi - round(2 * v / np.pi)) < 1e-6 else ""))
+
+
+def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path,
+                  degrees: bool = True) -> tuple:
     """Profiles of ``names`` over the profile dimension at the first grid point matching
     ``where``; where a profile spikes (1/dphi1 reactions) a symmetric-log y axis shows the
-    spike and the rest of the cycle."""
+    spike and the rest of the cycle. Angle axes get ticks every 90° (or pi/2); the crank
+    angles of special positions and impacts the atlas records are marked."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -123,8 +345,9 @@ def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path
         raise UserError("where: no grid point matches")
     at = {d: int(i) for d, i in zip(grid_dims, hits[0])}
     point = ds.isel(at)
-    fig, ax = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
-    x = point[pdim].values
+    fig, ax = plt.subplots(figsize=(8, 4.8), constrained_layout=True)
+    angle = point[pdim].attrs.get("units") == "rad"
+    x = _shown(point[pdim], degrees)
     scale = []
     for name in names:
         y = point[name].values
@@ -138,13 +361,48 @@ def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path
         ax.set_ylabel(f"[{', '.join(sorted(units))}] (symmetric log)")
     else:
         ax.set_ylabel(f"[{', '.join(sorted(units))}]")
-    ax.set_xlabel(_label(ds, pdim))
+    ax.set_xlabel(_label(ds, pdim, degrees))
+    if angle:
+        _angle_ticks(ax, degrees, float(x.min()), float(x.max()))
+        for value, kind in _angle_marks(point):
+            if np.isfinite(value):
+                shown = np.degrees(value) if degrees else value
+                period = 360.0 if degrees else 2 * np.pi
+                while shown > x.max() + 1e-9:  # marks of a 4 pi cycle on a 2 pi profile
+                    shown -= period
+                ax.axvline(shown, color="0.3", lw=0.8, ls=":")
+                ax.annotate(kind, (shown, 1.0), xycoords=("data", "axes fraction"),
+                            fontsize=7, rotation=90, va="top", ha="right")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
-    where_text = ", ".join(f"{d} = {point[d].values:.4g}" if point[d].dtype.kind == "f"
-                           else f"{d} = {point[d].values}" for d in grid_dims)
+    where_text = ", ".join(_point_text(point, d, degrees) for d in grid_dims)
     ax.set_title(f"{ds.attrs.get('title', '')}\nat {where_text}; made on "
                  f"{platform.node() or 'unknown host'} ({platform.machine()})", fontsize=8)
     fig.savefig(out, dpi=110)
     plt.close(fig)
     return out, where_text
+
+
+def _angle_marks(point: xr.Dataset) -> list[tuple[str, str]]:
+    """Scalar outputs that are crank angles of events (``impact_crank_angle_1``,
+    ``special_crank_angle``): (variable, label)."""
+    marks = []
+    for name in point.data_vars:
+        if point[name].ndim == 0 and point[name].attrs.get("units") == "rad" and (
+                "impact_crank_angle" in name or "special_crank_angle" in name):
+            label = name.replace("_crank_angle", "").replace("_", " ")
+            marks.append((float(point[name].values), label + " position"
+                          if label == "special" else label))
+            status = flag_table(point["status"]).get(int(point["status"].values))
+            if label == "special" and status == "second_special_position":
+                marks.append((float(point[name].values) + np.pi, "second special position"))
+    return marks
+
+
+def _point_text(point: xr.Dataset, dim: str, degrees: bool) -> str:
+    value = point[dim].values
+    if point[dim].dtype.kind != "f":
+        return f"{dim} = {value}"
+    units = _units(point, dim, degrees)
+    shown = np.degrees(value) if units == "deg" else value
+    return f"{dim} = {shown:.4g}" + ("" if units == "-" else f" {units}")

@@ -87,7 +87,7 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
         from sweep.chart import design_chart
 
         c = sweep_spec.chart
-        design_chart(written, c.x, c.y, c.color, chart_path)
+        design_chart(written, c.x, c.y, c.color, chart_path, at=c.at_values())
     if not quiet:
         counts = status_counts(written)
         click.echo(f"atlas: {target.resolve()}")
@@ -146,40 +146,15 @@ def parameters(mechanism):
 @cli.command()
 @click.argument("atlas_file", metavar="ATLAS")
 def info(atlas_file):
-    """Dimensions, variables with units, status counts and provenance of an atlas."""
-    import json
-
-    import numpy as np
-
-    from sweep.metadata import status_counts
+    """What an atlas's designs were computed with (grid, fixed parameters and method, in words
+    and units), the range of every output, status counts and provenance."""
+    from sweep import registry
+    from sweep.describe import atlas_text
 
     ds = _open_atlas(atlas_file)
-    click.echo(f"{atlas_file}: {ds.attrs.get('title', '')}")
-    click.echo(f"mechanism: {ds.attrs['mechanism']}")
-    click.echo("dimensions: " + ", ".join(f"{d} ({n})" for d, n in ds.sizes.items()))
-    for name in list(ds.coords) + list(ds.data_vars):
-        v = ds[name]
-        kind = "coord" if name in ds.coords else "var  "
-        click.echo(f"  {kind} {name:30s} [{v.attrs.get('units', '?')}] "
-                   f"{v.attrs.get('long_name', '')}")
-    counts = status_counts(ds)
-    total = sum(counts.values())
-    click.echo("status: " + ", ".join(f"{k} {v} ({100 * v / total:.1f}%)"
-                                      for k, v in counts.items() if v))
-    for name in ds.data_vars:  # categorical outputs (e.g. regime): counts of each meaning
-        attrs = ds[name].attrs
-        if name == "status" or "flag_meanings" not in attrs:
-            continue
-        values = ds[name].values
-        parts = [f"{m} {int((values == c).sum())}" for c, m in
-                 zip(np.atleast_1d(attrs["flag_values"]), attrs["flag_meanings"].split())
-                 if (values == c).any()]
-        click.echo(f"{name}: " + ", ".join(parts))
-    click.echo(f"code version: {ds.attrs.get('code_version', '?')}")
-    versions = json.loads(ds.attrs.get("package_versions", "{}"))
-    click.echo("packages: " + ", ".join(f"{k} {v}" for k, v in versions.items()))
-    click.echo(f"method: {ds.attrs.get('method', '?')}")
-    click.echo(f"history: {ds.attrs.get('history', '?')}")
+    name = ds.attrs.get("mechanism", "")
+    mech = registry.get(name).declaration if name in registry.names() else None
+    click.echo(atlas_text(ds, atlas_file, mech))
 
 
 def _at_values(pairs) -> dict[str, float]:
@@ -212,13 +187,15 @@ def _at_values(pairs) -> dict[str, float]:
                    "value per grid point)")
 @click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
               help="profiles at this value of their axis (nearest), e.g. crank_angle=90")
+@click.option("--degrees", is_flag=True,
+              help="print angles in degrees (--where and --sort stay in the atlas's radians)")
 @click.option("--format", "fmt", type=click.Choice(["table", "csv", "json"]), default="table")
-def query(atlas_file, where, sort, descending, limit, columns, at, fmt):
+def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt):
     """Select designs from an atlas with a safe expression language; flags print as their
     meanings, the table prints units under its header."""
     import json
 
-    from sweep.query import parse, select, units_of
+    from sweep.query import in_degrees, parse, select, units_of
 
     if where is not None:
         parse(where)  # syntax errors before the atlas is read
@@ -227,6 +204,9 @@ def query(atlas_file, where, sort, descending, limit, columns, at, fmt):
     cols = [c.strip() for c in columns.split(",") if c.strip()] if columns else None
     frame = select(ds, where, sort=sort, limit=limit, columns=cols, descending=descending,
                    at=at_values)
+    matched = frame.attrs["matched"]
+    if degrees:
+        frame = in_degrees(ds, frame)
     if fmt == "csv":
         click.echo(frame.to_csv(index=False), nl=False)
     elif fmt == "json":
@@ -240,12 +220,12 @@ def query(atlas_file, where, sort, descending, limit, columns, at, fmt):
     else:
         import pandas as pd
 
-        units = units_of(ds, frame.columns)
+        units = units_of(ds, frame.columns, degrees)
         header = pd.MultiIndex.from_arrays([list(frame.columns),
                                             [f"[{u}]" if u else "" for u in units]])
         click.echo(frame.set_axis(header, axis=1).to_string(index=False))
     if fmt == "table" or (limit is None and len(frame) > 50):
-        total = frame.attrs["matched"]
+        total = matched
         shown = f"{len(frame):,} of {total:,} matching points" if len(frame) < total else \
             f"{total:,} matching points"
         click.echo(shown, err=fmt != "table")
@@ -257,15 +237,22 @@ def query(atlas_file, where, sort, descending, limit, columns, at, fmt):
 @click.option("--y", "y", required=True, help="variable on the y axis")
 @click.option("--color", required=True, help="variable shown in colour")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default="chart.png")
-@click.option("--all-status", is_flag=True, help="also colour points whose status is not ok")
-def chart(atlas_file, x, y, color, output, all_status):
-    """Design chart (PNG) of COLOR over X and Y, with units."""
+@click.option("--all-status", is_flag=True,
+              help="also colour points whose status has no design values")
+@click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
+              help="take another grid axis at its nearest value, e.g. omega1=60")
+@click.option("--radians", is_flag=True, help="angles in radians (default: degrees)")
+def chart(atlas_file, x, y, color, output, all_status, at, radians):
+    """Design chart (PNG) of COLOR over X and Y, with units; a flag variable (regime,
+    status) is drawn as categories, cells without a value in greys named by their status."""
     from sweep.chart import design_chart
 
     if not output.endswith(".png"):
         raise UserError(f"output: {output} must end in .png")
+    at_values = _at_values(at)
     ds = _open_atlas(atlas_file)
-    path = design_chart(ds, x, y, color, Path(output), ok_only=not all_status)
+    path = design_chart(ds, x, y, color, Path(output), ok_only=not all_status,
+                        degrees=not radians, at=at_values).path
     click.echo(f"chart: {path.resolve()}")
 
 
@@ -274,7 +261,8 @@ def chart(atlas_file, x, y, color, output, all_status):
 @click.option("--vars", "names", required=True, help="comma-separated profile variables")
 @click.option("--where", default=None, help="condition picking the grid point (first match)")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default="profile.png")
-def profile(atlas_file, names, where, output):
+@click.option("--radians", is_flag=True, help="angles in radians, ticks at multiples of pi/2")
+def profile(atlas_file, names, where, output, radians):
     """Chart of profiles (e.g. joint reactions over crank_angle) at one grid point."""
     from sweep.chart import profile_chart
     from sweep.query import parse
@@ -285,7 +273,7 @@ def profile(atlas_file, names, where, output):
         parse(where)
     ds = _open_atlas(atlas_file)
     path, at = profile_chart(ds, [n.strip() for n in names.split(",") if n.strip()], where,
-                             Path(output))
+                             Path(output), degrees=not radians)
     click.echo(f"profile at {at}: {path.resolve()}")
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import textwrap
 
+import numpy as np
+
 from kernels.declaration import Mechanism, Quantity, used_when_text
 from sweep.spec import domain_text
 
@@ -55,4 +57,181 @@ def mechanism_text(mech: Mechanism) -> str:
     usable = ", ".join(("ok",) + mech.usable)
     lines += [""] + textwrap.wrap(f"statuses: {', '.join(mech.status)} (those with design "
                                   f"values: {usable})", 96, subsequent_indent="  ")
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------- sweep info
+
+def value_text(value, units: str) -> str:
+    """A value with its units; an angle also in degrees: '0.5236 rad (30°)'."""
+    if isinstance(value, str):
+        return f'"{value}"'
+    if value is None:
+        return "-"
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        return str(value)
+    text = f"{value:.6g}" + ("" if units in ("", "1") else f" {units}")
+    if units == "rad" and value != 0:
+        text += f" ({np.degrees(value):.4g}°)"
+    return text
+
+
+def _is_used(q: Quantity, given: dict) -> bool:
+    """Whether a quantity means something where ``given`` (name -> set of values) holds."""
+    return all(given.get(other, set()) & set(values) for other, values in q.used_when.items())
+
+
+def _axis_text(ds, name: str) -> str:
+    values = ds[name].values
+    units = ds[name].attrs.get("units", "")
+    if values.dtype.kind in "OUS":
+        return ", ".join(f'"{v.decode() if isinstance(v, bytes) else v}"' for v in values)
+    if values.size <= 6:
+        text = ", ".join(f"{v:.6g}" for v in values)
+    else:
+        steps = np.diff(values)
+        if np.allclose(steps, steps[0], rtol=1e-9, atol=0):
+            spacing = f", step {steps[0]:.4g}"
+        elif np.all(values > 0) and np.allclose(np.diff(np.log(values)), np.log(values[1] /
+                                                                               values[0])):
+            spacing = f", ratio {values[1] / values[0]:.4g} (log-spaced)"
+        else:
+            spacing = ", uneven"
+        text = f"{values[0]:.6g} to {values[-1]:.6g}, {values.size} values{spacing}"
+    if units == "rad" and values.size:
+        text += f" ({np.degrees(values[0]):.4g}° to {np.degrees(values[-1]):.4g}°)"
+    return text
+
+
+def _range_text(var) -> str:
+    values = np.asarray(var.values, dtype=float)
+    finite = values[np.isfinite(values)]
+    missing = values.size - finite.size
+    if not finite.size:
+        return "no values"
+    lo, hi = finite.min(), finite.max()
+    units = var.attrs.get("units", "")
+    text = f"{lo:.4g}" if lo == hi else f"{lo:.4g} to {hi:.4g}"
+    if units == "rad":
+        text += (f" ({np.degrees(lo):.4g}°)" if lo == hi else
+                 f" ({np.degrees(lo):.4g}° to {np.degrees(hi):.4g}°)")
+    if missing:
+        text += f"; no value at {missing:,} of {values.size:,}"
+    return text
+
+
+def _flag_counts(var) -> str:
+    values = np.asarray(var.values)
+    parts = []
+    for code, meaning in zip(np.atleast_1d(var.attrs["flag_values"]),
+                             var.attrs["flag_meanings"].split()):
+        n = int((values == code).sum())
+        if n:
+            share = 100 * n / values.size
+            parts.append(f"{meaning} {n:,} ("
+                         + ("< 0.1" if share < 0.05 else f"{share:.1f}") + " %)")
+    return ", ".join(parts)
+
+
+def atlas_text(ds, path: str, mech: Mechanism | None) -> str:
+    """What ``sweep info`` prints: what a design was computed with, in words and units, and
+    what the atlas holds (ranges per variable, counts per flag), then its provenance."""
+    import json
+
+    spec = json.loads(ds.attrs.get("spec", "{}"))
+    method = json.loads(ds.attrs.get("method", "{}"))
+    grid_dims = list(ds["status"].dims)
+    sizes = " x ".join(f"{d} {ds.sizes[d]}" for d in grid_dims)
+    n_points = int(np.prod([ds.sizes[d] for d in grid_dims]))
+    lines = [f"{path}: {ds.attrs.get('title', '')}",
+             f"mechanism: {ds.attrs.get('mechanism', '?')}"
+             + (f" ({mech.title})" if mech else "")]
+    lines += textwrap.wrap(f"source: {ds.attrs.get('references', '?')}", 96,
+                           subsequent_indent="  ")
+    lines += ["", f"grid: {n_points:,} points ({sizes})"]
+    width = max([len(str(n)) for n in ds.coords] + [len(str(n)) for n in ds.data_vars]
+                + [len(k) for k in spec.get("fixed", {})] + [len(k) for k in method] + [8])
+    for name in grid_dims:
+        attrs = ds[name].attrs
+        lines.append(f"  {name:{width}s}  [{units_text(attrs.get('units', ''))}]  "
+                     f"{_axis_text(ds, name)}")
+        lines.extend(textwrap.wrap(attrs.get("long_name", ""), 92,
+                                   initial_indent=" " * (width + 4),
+                                   subsequent_indent=" " * (width + 4)))
+    for name in ds.coords:
+        if name not in grid_dims:
+            lines.append(f"  {name:{width}s}  [{units_text(ds[name].attrs.get('units', ''))}]"
+                         f"  {_axis_text(ds, name)} (profile axis)")
+    given = {k: {v} for k, v in spec.get("fixed", {}).items()}
+    for name in grid_dims:
+        values = ds[name].values
+        given[name] = {v.decode() if isinstance(v, bytes) else v for v in values.tolist()}
+    fixed, unused = [], []
+    for name, value in spec.get("fixed", {}).items():
+        q = mech.parameter(name) if mech and name in {p.name for p in mech.parameters} \
+            else None
+        if q is not None and not _is_used(q, given):
+            unused.append(f"{name} (used only with {used_when_text(q)})")
+            continue
+        units = q.units if q else ""
+        long_name = q.long_name if q else ""
+        fixed.append(f"  {name:{width}s}  {value_text(value, units)}")
+        fixed.extend(textwrap.wrap(long_name, 92, initial_indent=" " * (width + 4),
+                                   subsequent_indent=" " * (width + 4)))
+    if fixed:
+        lines += ["", "fixed parameters:"] + fixed
+    if unused:
+        lines += textwrap.wrap("not used by this design: " + ", ".join(unused), 96,
+                               initial_indent="  ", subsequent_indent="    ")
+    keys = {m.name: m for m in (mech.method if mech else ())}
+    method_given = {k: {v} for k, v in method.items()}
+    options, idle = [], []
+    for name, value in method.items():
+        if name == "model":
+            continue
+        q = keys.get(name)
+        if q is not None and not _is_used(q, method_given):
+            idle.append(name)
+            continue
+        options.append(f"  {name:{width}s}  {value_text(value, q.units if q else '')}")
+        options.extend(textwrap.wrap(q.long_name if q else "", 92,
+                                     initial_indent=" " * (width + 4),
+                                     subsequent_indent=" " * (width + 4)))
+    lines += ["", "method:"] + options
+    if idle:
+        lines.append("  not used by this method: " + ", ".join(idle))
+    if "model" in method:
+        lines += textwrap.wrap(f"model: {method['model']}", 96, initial_indent="  ",
+                               subsequent_indent="    ")
+    status = ds["status"]
+    lines += ["", "status: " + _flag_counts(status)]
+    usable = status.attrs.get("usable_flags")
+    if usable and usable != "ok":
+        lines.append(f"  statuses with design values: {', '.join(usable.split())}")
+    lines += ["", "outputs (range over all points; NaN where a value does not exist):"]
+    for name in ds.data_vars:
+        if name == "status":
+            continue
+        var = ds[name]
+        units = units_text(var.attrs.get("units", ""))
+        extra = [d for d in var.dims if d not in grid_dims]
+        head = f"  {name:{width}s}  [{units}]  "
+        body = (_flag_counts(var) if "flag_meanings" in var.attrs else _range_text(var))
+        if extra:
+            body += f" (profile over {', '.join(extra)})"
+        lines += textwrap.wrap(head + body, 100, subsequent_indent=" " * (width + 4))
+        lines += textwrap.wrap(var.attrs.get("long_name", ""), 92,
+                               initial_indent=" " * (width + 4),
+                               subsequent_indent=" " * (width + 4))
+    run = spec.get("run", {})
+    chunks = ds["status"].encoding.get("chunksizes")
+    if run:
+        lines += ["", f"run: chunk {run.get('chunk')} points per task"
+                  + (f" (blocks of {' x '.join(map(str, chunks))})" if chunks else "")
+                  + f", compression level {run.get('compress_level')}"]
+    versions = json.loads(ds.attrs.get("package_versions", "{}"))
+    lines += [f"code version: {ds.attrs.get('code_version', '?')}",
+              *textwrap.wrap("packages: " + ", ".join(f"{k} {v}" for k, v in versions.items()),
+                             96, subsequent_indent="  "),
+              f"history: {ds.attrs.get('history', '?')}"]
     return "\n".join(lines)

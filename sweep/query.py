@@ -247,7 +247,7 @@ def select(ds: xr.Dataset, where: str | None, sort: str | None = None,
     return frame
 
 
-def units_of(ds: xr.Dataset, columns) -> list[str]:
+def units_of(ds: xr.Dataset, columns, degrees: bool = False) -> list[str]:
     """The units of each column, as printed under a table's header ("" for words)."""
     out = []
     for c in columns:
@@ -255,5 +255,16 @@ def units_of(ds: xr.Dataset, columns) -> list[str]:
         if var is None or "flag_meanings" in var.attrs or var.dtype.kind in "OUS":
             out.append("")
         else:
-            out.append(var.attrs.get("units", ""))
+            units = var.attrs.get("units", "")
+            out.append("deg" if degrees and units == "rad" else units)
     return out
+
+
+def in_degrees(ds: xr.Dataset, frame):
+    """The selected rows with every column in rad shown in degrees (the atlas keeps rad)."""
+    frame = frame.copy()
+    for c in frame.columns:
+        if c in ds.variables and ds[c].attrs.get("units") == "rad" \
+                and "flag_meanings" not in ds[c].attrs:
+            frame[c] = np.degrees(frame[c].astype(float))
+    return frame

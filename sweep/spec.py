@@ -51,6 +51,10 @@ class ChartSettings(_Strict):
     x: StrictStr
     y: StrictStr
     color: StrictStr
+    at: dict[str, float] = {}  # other grid axes taken at one value (nearest)
+
+    def at_values(self) -> dict[str, tuple[float, str]]:
+        return {name: (value, "") for name, value in self.at.items()}
 
 
 class SpecModel(_Strict):
@@ -459,3 +463,20 @@ def _chart(model: SpecModel, mech: Mechanism, axes: list[Axis], outputs: list[st
         if v not in names:
             raise UserError(f"chart.{axis}: {v!r} is neither a grid axis nor an output "
                             "of this sweep")
+    by_name = {axis.name: axis for axis in axes}
+    for name, value in model.chart.at.items():
+        axis = by_name.get(name)
+        if axis is None or axis.parameter.categorical:
+            raise UserError(f"chart.at: {name!r} is not a numeric grid axis; allowed: "
+                            + ", ".join(a.name for a in axes if not a.parameter.categorical))
+        lo, hi = float(np.min(axis.values)), float(np.max(axis.values))
+        if not lo <= value <= hi:
+            raise UserError(f"chart.at.{name}: {value:g} is outside the grid, {lo:g} to {hi:g}")
+    if model.chart.color in {p.name for p in mech.profiles}:
+        raise UserError(f"chart.color: {model.chart.color!r} is a profile; pick an output "
+                        "with one value per design")
+    others = [a.name for a in axes if a.name not in (model.chart.x, model.chart.y)
+              and a.name not in model.chart.at and len(a.values) > 1]
+    if len(others) > 1:
+        raise UserError(f"chart: more than one other axis to panel over ({', '.join(others)});"
+                        " take all but one at a value with chart.at")

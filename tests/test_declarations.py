@@ -45,7 +45,8 @@ def test_each_kernel_emits_exactly_the_statuses_it_declares(name):
 def test_no_magic_indices_for_parameters_or_outputs_in_kernels():
     pattern = re.compile(r"\b(out|outputs|params|pr|method|row|rows|prof|case|geo|vals)"
                          r"\[\s*\d")
-    hits = [f"{path.name}:{n}: {line.strip()}" for path in sorted((ROOT / "kernels").glob("*.py"))
+    hits = [f"{path.name}:{n}: {line.strip()}"
+            for path in sorted((ROOT / "kernels").rglob("*.py"))
             for n, line in enumerate(path.read_text().splitlines(), 1) if pattern.search(line)]
     assert not hits, hits
 

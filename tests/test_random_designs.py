@@ -114,6 +114,36 @@ def test_linkage_forces_peaks_work_and_rms_at_random_designs(second_node):
             math.sqrt(square / (2 * math.pi)), rel=1e-10)
 
 
+@pytest.mark.parametrize("identity", ["l0+l1=l2+l3", "l1+l2=l0+l3", "l1+l3=l0+l2"])
+def test_special_crank_angle_is_where_the_four_joints_are_collinear(identity):
+    """special_crank_angle, at random change-point four-bars of each identity, against the
+    geometry: there the crank pin B, the pivots and C lie on one line, so |BD| equals
+    l2 + l3 or |l2 - l3|. A linkage without a special position reports NaN."""
+    rng = rng_for(f"special angle {identity}")
+    found = 0
+    while found < 6:
+        l1 = 0.1
+        a, b = rng.uniform(0.15, 0.5, 2)
+        if identity == "l0+l1=l2+l3":
+            l0, l2, l3 = a, b, a + l1 - b
+        elif identity == "l1+l2=l0+l3":
+            l0, l2, l3 = a, b, l1 + b - a
+        else:
+            l0, l3, l2 = a, b, l1 + b - a
+        if min(l0, l2, l3) < 0.12:
+            continue
+        out, status, _ = kernel_point("linkage_forces", l0=l0, l1=l1, l2=l2, l3=l3)
+        if status not in ("special_position", "second_special_position"):
+            continue
+        found += 1
+        phi = out["special_crank_angle"]
+        bd = math.hypot(l0 - l1 * math.cos(phi), l1 * math.sin(phi))
+        assert min(abs(bd - (l2 + l3)), abs(bd - abs(l2 - l3))) < 1e-12, (l0, l2, l3, phi)
+    out, status, _ = kernel_point("linkage_forces", sigma=1, l0=0.3, l1=0.1, l2=0.25,
+                                  l3=0.2)
+    assert status == "ok" and math.isnan(out["special_crank_angle"])
+
+
 # ---------------------------------------------------------------- six-link
 
 def six_link_reference(lam2, lam3, mu4, mu5, beta, delta, direction):
