@@ -222,7 +222,8 @@ def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt)
 
         units = units_of(ds, frame.columns, degrees)
         header = pd.MultiIndex.from_arrays([list(frame.columns),
-                                            [f"[{u}]" if u else "" for u in units]])
+                                            [f"[{'-' if u == '1' else u}]" if u else ""
+                                             for u in units]])
         click.echo(frame.set_axis(header, axis=1).to_string(index=False))
     if fmt == "table" or (limit is None and len(frame) > 50):
         total = matched

@@ -178,6 +178,9 @@ def atlas_text(ds, path: str, mech: Mechanism | None) -> str:
         fixed.append(f"  {name:{width}s}  {value_text(value, units)}")
         fixed.extend(textwrap.wrap(long_name, 92, initial_indent=" " * (width + 4),
                                    subsequent_indent=" " * (width + 4)))
+    for q in (mech.parameters if mech else ()):  # not recorded: not used by this design
+        if q.name not in spec.get("fixed", {}) and q.name not in grid_dims and q.used_when:
+            unused.append(f"{q.name} (used only with {used_when_text(q)})")
     if fixed:
         lines += ["", "fixed parameters:"] + fixed
     if unused:
@@ -197,6 +200,8 @@ def atlas_text(ds, path: str, mech: Mechanism | None) -> str:
         options.extend(textwrap.wrap(q.long_name if q else "", 92,
                                      initial_indent=" " * (width + 4),
                                      subsequent_indent=" " * (width + 4)))
+    idle += [m.name for m in (mech.method if mech else ())
+             if m.name not in method and m.used_when]
     lines += ["", "method:"] + options
     if idle:
         lines.append("  not used by this method: " + ", ".join(idle))

@@ -234,6 +234,7 @@ def validate(raw: dict) -> Sweep:
     _mechanism_rules(mech, given)
     outputs = _outputs(model, mech, axes, record)
     _chart(model, mech, axes, outputs)
+    fixed_echo, method = _in_use(mech, given, fixed_echo, method)
     spec = {
         "mechanism": mech.name,
         "title": model.title or mech.title,
@@ -406,18 +407,32 @@ def _python_values(axis: Axis) -> list:
     return [float(v) for v in axis.values]
 
 
+def _is_used(mech: Mechanism, q: Quantity, prefix: str, given: dict[str, set]) -> bool:
+    """Whether a quantity means something for the values given (defaults elsewhere);
+    ``prefix`` is "method." for a method key."""
+    pool = mech.parameters if not prefix else mech.method
+    for other, values in q.used_when.items():
+        default = next(o.default for o in pool if o.name == other)
+        if not given.get(prefix + other, {default}) & set(values):
+            return False
+    return True
+
+
 def _where_used(mech: Mechanism, given: dict[str, set], method: dict) -> None:
     """A quantity given where the declaration says it means nothing is an error."""
     for q, key, prefix in ([(p, p.name, "") for p in mech.parameters]
                            + [(m, "method." + m.name, "method.") for m in mech.method]):
-        if key not in given or not q.used_when:
-            continue
-        for other, values in q.used_when.items():
-            pool = mech.parameters if not prefix else mech.method
-            default = next(o.default for o in pool if o.name == other)
-            effective = given.get(prefix + other, {default})
-            if not effective & set(values):
-                raise UserError(f"{key}: used only with {used_when_text(q)}")
+        if key in given and not _is_used(mech, q, prefix, given):
+            raise UserError(f"{key}: used only with {used_when_text(q)}")
+
+
+def _in_use(mech: Mechanism, given: dict[str, set], fixed: dict, method: dict) -> tuple:
+    """The fixed values and method options that mean something for this sweep: what the
+    atlas records (a recorded spec runs again as it is, and says only what was used)."""
+    return ({k: v for k, v in fixed.items()
+             if _is_used(mech, mech.parameter(k), "", given)},
+            {k: v for k, v in method.items()
+             if _is_used(mech, mech.method_key(k), "method.", given)})
 
 
 def _mechanism_rules(mech: Mechanism, given: dict[str, set]) -> None:

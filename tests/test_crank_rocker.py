@@ -164,7 +164,7 @@ def test_O4_impact_ratio_matches_a_one_sided_difference_of_the_loop_closure():
 
 
 def test_paper_tables_audit_exactly_five_printed_cells_are_wrong():
-    """Seed 000's printed tables vs the exact values (3e-3 abs): the five cells of the two
+    """[CR]'s printed tables vs the exact values (3e-3 abs): the five cells of the two
     lambda = 3.0 columns are wrong, the rest are right to the printed digits; the six
     columns with largest link < gamma are not crank-rockers at all."""
     wrong = set()
@@ -211,7 +211,7 @@ def test_O5_feasibility_boundaries():
 
 
 def test_frequency_claim_ratio_of_type_a_to_type_c_impact_ratios():
-    """Seed 000 claims 4-5x; at equal largest link L it is (1+L)(g^2+L)/(L(g^2-1))."""
+    """[CR] claims 4-5x; at equal largest link L it is (1+L)(g^2+L)/(L(g^2-1))."""
     expected = {2.0: 3.34, 2.5: 3.40, 3.0: 3.51, 4: 3.80, 5: 4.14, 6: 4.50, 7: 4.88, 8: 5.26}
     for big, ratio in expected.items():
         a = crank_rocker_point(type="a", largest_link=big)[0]["impact_transfer_ratio"]

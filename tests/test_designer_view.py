@@ -72,7 +72,7 @@ def test_info_says_what_a_design_was_computed_with_in_words_and_units(tmp_path, 
     assert re.search(r"^\s+l2\s+0\.04 m$", out, re.M)
     assert re.search(r'^\s+model\s+"paper"$', out, re.M)
     assert re.search(r"^\s+xi\s+4$", out, re.M)
-    assert "tool_window (used only with tool = \"lab_window\")" in out
+    assert "tool_window (used only with tool = \"lab_window\")" in " ".join(out.split())
     for name in stored["fixed"]:
         assert re.search(rf"\b{name}\b", out), name
     # method options in words, the unused ones named, no raw JSON or escapes
@@ -194,3 +194,33 @@ def test_query_prints_angles_in_degrees_on_request(pendulum, capsys):
     code, out, _ = run_cli(capsys, "query", str(pendulum), "--columns", "amplitude",
                            "--limit", "1", "--degrees")
     assert code == 0 and "[deg]" in out.splitlines()[1]
+
+
+@pytest.mark.parametrize("name", ["crank_rocker", "linkage_forces", "rotary_pendulum",
+                                  "rotary_pendulum_blade", "six_link", "spring_balancer",
+                                  "models on the grid"])
+def test_the_spec_an_atlas_records_runs_again_as_it_is(name):
+    """The recorded spec lists only what the design used (a default of an unused parameter,
+    such as tool_window on the rotor stop or rtol under auto, used to be recorded and made
+    the recorded spec fail validation), and validating it gives the same spec back."""
+    from sweep.cli import _example_text
+
+    text = (PENDULUM.replace('model = "paper"\n', "").replace(
+        "[grid]", '[grid]\nmodel = ["paper", "rigid"]') if name == "models on the grid"
+        else _example_text(name))
+    first = spec.parse(text)
+    recorded = json.loads(first.spec_json())
+    again = spec.validate(recorded)
+    assert again.spec == recorded
+    assert again.fixed == first.fixed and again.method_record == first.method_record
+    decl = first.mechanism
+    for key in recorded["fixed"]:
+        q = decl.parameter(key)
+        for other, values in q.used_when.items():
+            assert set(values) & ({recorded["fixed"][other]} if other in recorded["fixed"]
+                                  else set(first.axes[[a.name for a in first.axes]
+                                                      .index(other)].values.tolist())), key
+    if name == "models on the grid":
+        assert "rotor_inertia_ratio" not in recorded["fixed"]  # no rotor on this grid
+    if recorded["method"].get("integrator") == "auto":
+        assert not {"rtol", "atol", "dt"} & set(recorded["method"])
