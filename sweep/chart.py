@@ -18,6 +18,7 @@ import numpy as np
 import xarray as xr
 
 from sweep.errors import UserError
+from sweep.query import evaluate, flag_names, take_at
 
 #: panels per row of a chart with one panel per value of another axis
 PANELS_PER_ROW = 3
@@ -85,12 +86,6 @@ def _number(value: float) -> str:
     return f"{value:,.0f}" if "e+" in text else text
 
 
-def flag_table(var: xr.DataArray) -> dict[int, str]:
-    """Code -> meaning of a flag variable."""
-    codes = np.atleast_1d(var.attrs["flag_values"]).astype(int)
-    return dict(zip(codes.tolist(), var.attrs["flag_meanings"].split()))
-
-
 def _marks(ds: xr.Dataset, name: str) -> tuple:
     """The declared (value, meaning) levels of an output (from the mechanism's declaration)."""
     from sweep import registry
@@ -102,28 +97,6 @@ def _marks(ds: xr.Dataset, name: str) -> tuple:
         return registry.get(mech).declaration.output(name).marks
     except KeyError:
         return ()
-
-
-def select_slices(ds: xr.Dataset, at: dict | None) -> tuple[xr.Dataset, str]:
-    """The atlas at the nearest value of each grid axis in ``at`` ({axis: (value, unit)}),
-    and a caption of what was chosen."""
-    chosen = []
-    for dim, (value, unit) in (at or {}).items():
-        if dim not in ds["status"].dims:
-            raise UserError(f"at: {dim!r} is not a grid axis of this atlas; allowed: "
-                            + ", ".join(map(str, ds["status"].dims)))
-        axis = ds[dim]
-        if axis.dtype.kind not in "fiu":
-            raise UserError(f"at: {dim} is categorical; its values are drawn as panels")
-        units = axis.attrs.get("units", "")
-        if unit == "deg":
-            if units != "rad":
-                raise UserError(f"at: {dim} is in {units or 'no units'}, not an angle in rad")
-            value = np.radians(value)
-        ds = ds.sel({dim: value}, method="nearest").expand_dims(dim)
-        shown = float(ds[dim].values[0])
-        chosen.append(f"{dim} = {shown:.6g}" + ("" if units in ("", "1") else f" {units}"))
-    return ds, ", ".join(chosen)
 
 
 def _panel_title(ds: xr.Dataset, dim: str, k: int, degrees: bool) -> str:
@@ -163,7 +136,7 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                         "`sweep query --at` for its value at one angle")
     if ds[color].dtype.kind in "OUS":
         raise UserError(f"color: {color!r} is categorical; pick a numeric or flag variable")
-    ds, chosen = select_slices(ds, at)
+    ds, chosen = take_at(ds, at, grid=True)
     facet_dims = [d for d in grid_dims if d not in (x, y) and ds.sizes[d] > 1]
     if len(facet_dims) > 1:
         raise UserError(f"chart: more than one other axis to panel over ({', '.join(facet_dims)});"
@@ -175,10 +148,10 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                              squeeze=False, constrained_layout=True)
     var = ds[color]
     status = ds["status"]
-    status_names = flag_table(status)
+    status_names = flag_names(status)
     is_flag = "flag_meanings" in var.attrs
     if is_flag:
-        names = flag_table(var)
+        names = flag_names(var)
         present = sorted(int(c) for c in np.unique(var.values) if int(c) in names)
         index = {code: i for i, code in enumerate(present)}
         cmap = mcolors.ListedColormap([CATEGORY_COLOURS[i % len(CATEGORY_COLOURS)]
@@ -301,7 +274,7 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     return drawn
 
 
-def _angle_ticks(ax, degrees: bool, lo: float, hi: float) -> None:
+def _angle_ticks(ax, degrees: bool) -> None:
     """Crank-angle ticks at multiples of 90° (pi/2)."""
     import matplotlib.ticker as ticker
 
@@ -327,7 +300,6 @@ def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from sweep.query import evaluate
 
     if not names:
         raise UserError("vars: give at least one profile variable")
@@ -363,7 +335,7 @@ def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path
         ax.set_ylabel(f"[{', '.join(sorted(units))}]")
     ax.set_xlabel(_label(ds, pdim, degrees))
     if angle:
-        _angle_ticks(ax, degrees, float(x.min()), float(x.max()))
+        _angle_ticks(ax, degrees)
         for value, kind in _angle_marks(point):
             if np.isfinite(value):
                 shown = np.degrees(value) if degrees else value
@@ -393,7 +365,7 @@ def _angle_marks(point: xr.Dataset) -> list[tuple[str, str]]:
             label = name.replace("_crank_angle", "").replace("_", " ")
             marks.append((float(point[name].values), label + " position"
                           if label == "special" else label))
-            status = flag_table(point["status"]).get(int(point["status"].values))
+            status = flag_names(point["status"]).get(int(point["status"].values))
             if label == "special" and status == "second_special_position":
                 marks.append((float(point[name].values) + np.pi, "second special position"))
     return marks

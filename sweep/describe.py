@@ -7,7 +7,8 @@ import textwrap
 import numpy as np
 
 from kernels.declaration import Mechanism, Quantity, used_when_text
-from sweep.spec import domain_text
+from sweep.query import flag_names
+from sweep.spec import domain_text, is_used
 
 
 def units_text(units: str) -> str:
@@ -76,11 +77,6 @@ def value_text(value, units: str) -> str:
     return text
 
 
-def _is_used(q: Quantity, given: dict) -> bool:
-    """Whether a quantity means something where ``given`` (name -> set of values) holds."""
-    return all(given.get(other, set()) & set(values) for other, values in q.used_when.items())
-
-
 def _axis_text(ds, name: str) -> str:
     values = ds[name].values
     units = ds[name].attrs.get("units", "")
@@ -123,8 +119,7 @@ def _range_text(var) -> str:
 def _flag_counts(var) -> str:
     values = np.asarray(var.values)
     parts = []
-    for code, meaning in zip(np.atleast_1d(var.attrs["flag_values"]),
-                             var.attrs["flag_meanings"].split()):
+    for code, meaning in flag_names(var).items():
         n = int((values == code).sum())
         if n:
             share = 100 * n / values.size
@@ -170,7 +165,7 @@ def atlas_text(ds, path: str, mech: Mechanism | None) -> str:
     for name, value in spec.get("fixed", {}).items():
         q = mech.parameter(name) if mech and name in {p.name for p in mech.parameters} \
             else None
-        if q is not None and not _is_used(q, given):
+        if q is not None and not is_used(mech, q, "", given):
             unused.append(f"{name} (used only with {used_when_text(q)})")
             continue
         units = q.units if q else ""
@@ -187,13 +182,13 @@ def atlas_text(ds, path: str, mech: Mechanism | None) -> str:
         lines += textwrap.wrap("not used by this design: " + ", ".join(unused), 96,
                                initial_indent="  ", subsequent_indent="    ")
     keys = {m.name: m for m in (mech.method if mech else ())}
-    method_given = {k: {v} for k, v in method.items()}
+    method_given = {f"method.{k}": {v} for k, v in method.items()}
     options, idle = [], []
     for name, value in method.items():
         if name == "model":
             continue
         q = keys.get(name)
-        if q is not None and not _is_used(q, method_given):
+        if q is not None and not is_used(mech, q, "method.", method_given):
             idle.append(name)
             continue
         options.append(f"  {name:{width}s}  {value_text(value, q.units if q else '')}")

@@ -163,14 +163,22 @@ def grid_variables(ds: xr.Dataset) -> list[str]:
     return [str(v) for v in ds.data_vars if set(ds[v].dims) <= dims]
 
 
-def at_profile(ds: xr.Dataset, at: dict[str, float] | None) -> xr.Dataset:
-    """The atlas with every profile axis in ``at`` taken at its nearest value."""
+def take_at(ds: xr.Dataset, at: dict | None, grid: bool = False) -> tuple[xr.Dataset, str]:
+    """The atlas with each axis in ``at`` ({axis: (value, "" or "deg")}) taken at its nearest
+    value, and a caption of the values taken. Profile axes by default; ``grid``: grid axes
+    (kept as a dimension of length 1, for a chart)."""
+    allowed = (list(ds["status"].dims) if grid
+               else sorted(set(ds.dims) - set(ds["status"].dims)))
+    chosen = []
     for dim, (value, unit) in (at or {}).items():
-        if dim not in ds.dims or dim in ds["status"].dims:
-            extra = sorted(set(ds.dims) - set(ds["status"].dims))
-            raise UserError(f"at: {dim!r} is not a profile axis of this atlas; allowed: "
-                            + (", ".join(extra) or "none (the atlas has no profiles)"))
+        if dim not in allowed:
+            kind = "grid axis" if grid else "profile axis"
+            raise UserError(f"at: {dim!r} is not a {kind} of this atlas; allowed: "
+                            + (", ".join(map(str, allowed)) or "none (the atlas has no "
+                                                                "profiles)"))
         axis = ds[dim]
+        if axis.dtype.kind not in "fiu":
+            raise UserError(f"at: {dim} is categorical; its values are drawn as panels")
         units = axis.attrs.get("units", "")
         if unit == "deg":
             if units != "rad":
@@ -181,11 +189,16 @@ def at_profile(ds: xr.Dataset, at: dict[str, float] | None) -> xr.Dataset:
         if not lo - step <= value <= hi + step:
             shown = (f"{np.degrees(lo):.4g}-{np.degrees(hi):.4g} deg" if units == "rad"
                      else f"{lo:.4g}-{hi:.4g} {units}")
-            raise UserError(f"at: {dim} = {value:.6g} {units} is outside the profile's "
-                            f"range, {lo:.4g}-{hi:.4g} {units}"
+            raise UserError(f"at: {dim} = {value:.6g} {units} is outside the "
+                            f"{'grid' if grid else 'profile'}'s range, {lo:.4g}-{hi:.4g} "
+                            f"{units}"
                             + (f" ({shown}; write e.g. {dim}=90deg)" if units == "rad" else ""))
         ds = ds.sel({dim: value}, method="nearest")
-    return ds
+        chosen.append(f"{dim} = {float(ds[dim].values):.6g}"
+                      + ("" if units in ("", "1") else f" {units}"))
+        if grid:
+            ds = ds.expand_dims(dim)
+    return ds, ", ".join(chosen)
 
 
 def flag_names(var: xr.DataArray) -> dict[int, str] | None:
@@ -205,7 +218,7 @@ def select(ds: xr.Dataset, where: str | None, sort: str | None = None,
     asked, at the value of their axis given in ``at``."""
     import pandas as pd
 
-    ds = at_profile(ds, at)
+    ds, _ = take_at(ds, at)
     if sort is not None and sort not in ds.variables:
         raise UserError(f"sort: unknown variable {sort!r}")
     dims = list(ds["status"].dims)

@@ -407,7 +407,7 @@ def _python_values(axis: Axis) -> list:
     return [float(v) for v in axis.values]
 
 
-def _is_used(mech: Mechanism, q: Quantity, prefix: str, given: dict[str, set]) -> bool:
+def is_used(mech: Mechanism, q: Quantity, prefix: str, given: dict[str, set]) -> bool:
     """Whether a quantity means something for the values given (defaults elsewhere);
     ``prefix`` is "method." for a method key."""
     pool = mech.parameters if not prefix else mech.method
@@ -422,7 +422,7 @@ def _where_used(mech: Mechanism, given: dict[str, set], method: dict) -> None:
     """A quantity given where the declaration says it means nothing is an error."""
     for q, key, prefix in ([(p, p.name, "") for p in mech.parameters]
                            + [(m, "method." + m.name, "method.") for m in mech.method]):
-        if key in given and not _is_used(mech, q, prefix, given):
+        if key in given and not is_used(mech, q, prefix, given):
             raise UserError(f"{key}: used only with {used_when_text(q)}")
 
 
@@ -430,9 +430,9 @@ def _in_use(mech: Mechanism, given: dict[str, set], fixed: dict, method: dict) -
     """The fixed values and method options that mean something for this sweep: what the
     atlas records (a recorded spec runs again as it is, and says only what was used)."""
     return ({k: v for k, v in fixed.items()
-             if _is_used(mech, mech.parameter(k), "", given)},
+             if is_used(mech, mech.parameter(k), "", given)},
             {k: v for k, v in method.items()
-             if _is_used(mech, mech.method_key(k), "method.", given)})
+             if is_used(mech, mech.method_key(k), "method.", given)})
 
 
 def _mechanism_rules(mech: Mechanism, given: dict[str, set]) -> None:

@@ -88,7 +88,10 @@ def test_info_says_what_a_design_was_computed_with_in_words_and_units(tmp_path, 
         assert f"[{units}]" in line and f"{lo:.4g} to {hi:.4g}" in line, line
         missing = int(np.isnan(values).sum())
         assert (f"no value at {missing:,} of {values.size:,}" in line) == (missing > 0)
-    assert "(98." in out or "°" in out  # an angle's range also in degrees
+    amplitude = ds.amplitude.values
+    line = next(line for line in out.splitlines() if line.startswith("  amplitude "))
+    assert (f"({np.degrees(np.nanmin(amplitude)):.4g}° to "
+            f"{np.degrees(np.nanmax(amplitude)):.4g}°)") in line  # an angle also in degrees
     # grid axes with their values and units
     assert re.search(r"^\s+omega1\s+\[rad s-1\]\s+20, 60$", out, re.M)
     assert re.search(r"^\s+k\s+\[-\]\s+1 to 2\.5, 7 values, step 0\.25$", out, re.M)
