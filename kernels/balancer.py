@@ -18,7 +18,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels.declaration import POSITIVE, Mechanism, Output, Quantity
+from kernels.declaration import POSITIVE, Boundary, Mechanism, Output, Quantity
 from kernels.fourbar import closure_vectors, crank_turns_fully, vector_kinematics
 
 NEUTRAL_HALF_SWING, NEUTRAL_MEAN = 0, 1
@@ -68,9 +68,10 @@ DECLARATION = Mechanism(
                "(K_d,zr)", "K_d,zr"),
         Output("acceleration_invariant_rigid", "1", "peak rocker acceleration invariant "
                "max |d2 gamma/d theta2| (rigid shaft)"),
-        Output("harmonics_used", "1", "harmonics of the rocker motion used"),
+        Output("harmonics_used", "1", "harmonics of the rocker motion used",
+               diagnostic=True),
         Output("truncation_error", "1", "estimated relative truncation error of the "
-               "acceleration metrics"),
+               "acceleration metrics", diagnostic=True),
         Output("resonance_margin", "1", "distance to the nearest resonance, min |D_n|/K"),
     ),
     status=("ok", "not_assemblable", "resonance", "truncation", "nonfinite"),
@@ -83,6 +84,11 @@ DECLARATION = Mechanism(
         Quantity("resonance_tol", "1", "flag resonance where |D_n + i E_n| < resonance_tol "
                  "K", default=1e-9, minimum=0.0, maximum=0.1),
     ),
+    boundaries=tuple(
+        Boundary(frozenset((side, "resonance")), "a harmonic n of the rocker motion meets a "
+                 "natural frequency: n f r = 1 without the balancer, n f r = sqrt(1 + r^2) "
+                 "with it (to within resonance_tol)", indicator="resonance_margin")
+        for side in ("ok", "truncation")),
 )
 P = DECLARATION.parameter_index
 O = DECLARATION.output_index

@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
+from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Boundary, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol)
 from kernels.fourbar import (
     CHANGE_POINT_A,
@@ -129,7 +129,7 @@ DECLARATION = Mechanism(
         Output("special_crank_angle", "rad", "crank angle of the impact special position "
                "(phi1*)", "φ1*"),
         Output("special_position_count", "1", "number of special positions per crank "
-               "turn"),
+               "turn", diagnostic=True),
         Output("restitution_kinematic_max", "1", "largest |Rk| reachable with this rocker "
                "ratio (type b only)"),
     ),
@@ -137,6 +137,17 @@ DECLARATION = Mechanism(
             "degenerate", "no_impact", "second_special_position", "no_special_position"),
     method=(geometry_tol("the full-turn test"),),
     rules=_rules,
+    boundaries=(
+        *(Boundary(frozenset(sides), "types a and c: the largest link reaches gamma = "
+                   "(1+R)/(1-R), below which the synthesized linkage cannot close; at gamma "
+                   "itself it has a second change point (flagged within geometry_tol)",
+                   indicator="gamma")
+          for sides in (("ok", "not_assemblable"), ("not_assemblable", "second_special_position"),
+                        ("second_special_position", "ok"))),
+        Boundary(frozenset(("ok", "no_real_synthesis")), "type b: the rocker reaches "
+                 "(gamma + sqrt(gamma^2 - 1))^2, below which no base makes Rk = -R "
+                 "(restitution_kinematic_max = R there)", indicator="restitution_kinematic_max"),
+    ),
 )
 P = DECLARATION.parameter_index
 O = DECLARATION.output_index

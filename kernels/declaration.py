@@ -91,6 +91,8 @@ class Output:
     parameter is given (a grid axis then carries it: no data variable collides with it).
     ``marks``: (value, meaning) pairs a design chart draws as labelled lines, the levels a
     designer reads the output against (K = 1, where a balancer stops helping).
+    ``diagnostic``: the output describes the computation (steps, harmonics, an error
+    estimate), so a jump in it across a boundary says nothing about the design.
     """
 
     name: str
@@ -102,6 +104,8 @@ class Output:
     undetermined: str | None = None
     echoes: str | None = None
     marks: tuple = ()
+    diagnostic: bool = False  # a count or estimate of the computation, not a design value
+
 
     @property
     def is_flag(self) -> bool:
@@ -109,6 +113,17 @@ class Output:
 
     def flag_code_of_nan(self) -> int:
         return int(self.flags[self.undetermined])
+
+
+@dataclass(frozen=True)
+class Boundary:
+    """What explains a boundary between two flag meanings (of ``status`` or of a flag
+    output), for ``sweep boundaries``: a sentence, and the continuous output whose value at
+    the crossing says where the limit is (the indicator; dimensionless), if there is one."""
+
+    sides: frozenset
+    explains: str
+    indicator: str | None = None
 
 
 @dataclass(frozen=True)
@@ -123,6 +138,8 @@ class Mechanism:
     ``used_when`` restrictions are checked before it.
     ``whole_axes``: grid axes the kernel rescales instead of solving again (kept whole in
     every block). ``profile_coordinate``: method record -> the profile dimension's values.
+    ``boundaries``: what explains the boundaries between flag meanings that have a known
+    cause (``Boundary``); the others are labelled by what the outputs do across them.
     """
 
     name: str
@@ -139,6 +156,7 @@ class Mechanism:
     profile_coordinate: Callable | None = None
     whole_axes: tuple[str, ...] = ()
     rules: Callable[[dict], str | None] | None = None
+    boundaries: tuple[Boundary, ...] = ()
 
     def __post_init__(self):
         for kind, items in (("parameter", self.parameters), ("output", self.outputs),
@@ -164,6 +182,19 @@ class Mechanism:
         for o in self.outputs:
             if o.echoes is not None and o.echoes not in names:
                 raise ValueError(f"{self.name}: {o.name} echoes an unknown parameter")
+        meanings = set(self.status).union(*(o.flags for o in self.outputs if o.is_flag))
+        for b in self.boundaries:
+            if len(b.sides) != 2 or not b.sides <= meanings:
+                raise ValueError(f"{self.name}: boundary {sorted(b.sides)} is not two meanings")
+            if b.indicator is not None and self.output(b.indicator).units != "1":
+                raise ValueError(f"{self.name}: indicator {b.indicator} is not dimensionless")
+
+    def boundary(self, a: str, b: str) -> Boundary | None:
+        """The declared explanation of a boundary between meanings a and b, if any."""
+        for item in self.boundaries:
+            if item.sides == frozenset((a, b)):
+                return item
+        return None
 
     # ---------------------------------------------------------------- lookups
 

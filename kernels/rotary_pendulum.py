@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels.declaration import POSITIVE, Mechanism, Output, Quantity
+from kernels.declaration import POSITIVE, Boundary, Mechanism, Output, Quantity
 from kernels.impact.outcomes import (SEQUENCE_CYCLE, SEQUENCE_DEGENERATE, SEQUENCE_ESCAPE,
                                      SEQUENCE_MAX_STEPS, SEQUENCE_NO_IMPACT,
                                      SEQUENCE_NONFINITE, SEQUENCE_NOT_PERIODIC,
@@ -115,7 +115,8 @@ DECLARATION = Mechanism(
         Output("impact_interval", "rad", "rotor angle between impacts in steady state "
                "(tau1; on the blade, between the impacts opening each contact)", "τ1"),
         Output("impacts_to_converge", "1", "impacts from rest to the steady state (to "
-               "1e-12 by the closed form, to 10 rtol when integrated), or until escape"),
+               "1e-12 by the closed form, to 10 rtol when integrated), or until escape",
+               diagnostic=True),
         Output("acceleration_peak", "rad s-2", "peak relative angular acceleration of the "
                "pendulum in steady state", "|ψ''|max"),
         Output("restitution_critical", "1", "largest R with a periodic impact regime "
@@ -123,16 +124,19 @@ DECLARATION = Mechanism(
                "is known", "R_crit"),
         Output("rotor_speed_ratio", "1", "mean rotor speed over the steady cycle over "
                "omega1 (1 at constant rotor speed)"),
-        Output("n_steps", "1", "integration steps, accepted and rejected (0: closed form)"),
-        Output("n_rejected", "1", "rejected integration steps among n_steps"),
-        Output("n_events", "1", "impact events located by the integrator"),
+        Output("n_steps", "1", "integration steps, accepted and rejected (0: closed form)",
+               diagnostic=True),
+        Output("n_rejected", "1", "rejected integration steps among n_steps",
+               diagnostic=True),
+        Output("n_events", "1", "impact events located by the integrator", diagnostic=True),
         Output("method_used", "1", "method that produced the values",
                flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5}),
         Output("error_estimate", "1", "auto: estimated relative error of the steady cycle's "
                "values (the largest over amplitude, frequency ratio, period, impact speed "
                "and interval, acceleration peak, rotor speed ratio), from two DOPRI5 solves "
                "8 times apart in rtol; 0 by the closed form; inf where the two solves reach "
-               "different regimes; NaN with a fixed integrator or without a cycle"),
+               "different regimes; NaN with a fixed integrator or without a cycle",
+               diagnostic=True),
     ),
     status=("ok", "escape", "no_impact", "not_periodic", "separatrix", "max_steps",
             "step_underflow", "degenerate", "nonfinite"),
@@ -159,6 +163,10 @@ DECLARATION = Mechanism(
     ),
     rules=_rules,
     whole_axes=("omega1", "l2"),
+    boundaries=tuple(
+        Boundary(frozenset((cycle, "escape")), "the steady impact speed reaches the escape "
+                 "threshold v_crit: R = R_crit = (v_crit - (1+k))/(v_crit + (1+k))",
+                 indicator="restitution_critical") for cycle in ("ok", "period_1")),
 )
 P = DECLARATION.parameter_index
 O = DECLARATION.output_index

@@ -25,6 +25,8 @@ PANELS_PER_ROW = 3
 #: the categories' colours (a qualitative map), and the greys of cells without a value
 CATEGORY_COLOURS = ("#4e79a7", "#f28e2b", "#59a14f", "#e15759", "#b07aa1", "#edc948",
                     "#76b7b2", "#ff9da7", "#9c755f", "#bab0ac")
+#: crossings this close (relative) on one edge are drawn as one
+THIN_BAND = 1e-6
 BLANK_GREYS = ("0.86", "0.72", "0.58", "0.93", "0.65", "0.79")
 
 
@@ -111,17 +113,20 @@ def _panel_title(ds: xr.Dataset, dim: str, k: int, degrees: bool) -> str:
 
 
 def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
-                 ok_only: bool = True, degrees: bool = True, at: dict | None = None) -> Path:
+                 ok_only: bool = True, degrees: bool = True, at: dict | None = None,
+                 boundaries: xr.Dataset | None = None) -> Drawn:
     """Chart of ``color`` over (x, y), one panel per value of the other grid axis of more than
     one value (at most three panels a row). ``ok_only``: cells whose status has no design
     values are drawn as their status, not as a value; ``degrees``: angles in degrees;
-    ``at``: take other grid axes at one value ({axis: (value, "" or "deg")})."""
+    ``at``: take other grid axes at one value ({axis: (value, "" or "deg")});
+    ``boundaries``: the refined crossings of ``sweep boundaries``, drawn as lines."""
     import matplotlib
     import matplotlib.colors as mcolors
     import matplotlib.ticker as ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
     from matplotlib.patches import Patch
 
     from sweep.metadata import usable_mask
@@ -136,6 +141,9 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                         "`sweep query --at` for its value at one angle")
     if ds[color].dtype.kind in "OUS":
         raise UserError(f"color: {color!r} is categorical; pick a numeric or flag variable")
+    if boundaries is not None:
+        check_boundaries(ds, boundaries)
+    grid_shape = ds["status"].shape
     ds, chosen = take_at(ds, at, grid=True)
     facet_dims = [d for d in grid_dims if d not in (x, y) and ds.sizes[d] > 1]
     if len(facet_dims) > 1:
@@ -207,6 +215,14 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                           norm=grey_norm, shading="nearest")
             mesh = ax.pcolormesh(x_values, y_values, grid, norm=norm, cmap=cmap,
                                  shading="nearest")
+            if boundaries is not None:
+                panel = {d: ds[d].values[pick.get(d, 0)] for d in grid_dims
+                         if d not in (x, y) and (d in pick or ds.sizes[d] == 1)}
+                segments = boundary_segments(boundaries, grid_dims, grid_shape, x, y, panel)
+                fx, fy = (np.degrees(1.0) if degrees and ds[n].attrs.get("units") == "rad"
+                          else 1.0 for n in (x, y))
+                segments = [[(a * fx, b * fy) for a, b in seg] for seg in segments]
+                ax.add_collection(LineCollection(segments, colors="black", linewidths=1.3))
             if not is_flag and np.isfinite(grid).sum() > 4:
                 if len(levels):
                     lines = ax.contour(x_values, y_values, grid, levels=levels, norm=norm,
@@ -234,6 +250,10 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     for ax in axes.ravel()[len(panels):]:
         ax.set_visible(False)
     handles = []
+    if boundaries is not None:
+        handles.append(plt.Line2D([], [], color="black", lw=1.3, label=(
+            f"boundaries of {boundaries.attrs.get('variable')}, refined to "
+            f"{float(boundaries.attrs.get('tolerance', np.nan)):g}")))
     if is_flag:
         handles += [Patch(color=CATEGORY_COLOURS[i % len(CATEGORY_COLOURS)], label=names[c])
                     for c, i in index.items()]
@@ -272,6 +292,73 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                   not is_flag)
     plt.close(fig)
     return drawn
+
+
+def check_boundaries(ds: xr.Dataset, bounds: xr.Dataset) -> None:
+    """A boundaries file drawn on an atlas must come from the same sweep (grid, fixed
+    parameters and method; run settings and chart may differ)."""
+    import json
+
+    def sweep_of(spec_text):
+        spec = json.loads(spec_text)
+        return {k: v for k, v in spec.items() if k not in ("run", "chart", "title", "outputs")}
+
+    if "grid_point" not in bounds or "spec" not in bounds.attrs:
+        raise UserError("boundaries: not a file written by `sweep boundaries`")
+    if sweep_of(bounds.attrs["spec"]) != sweep_of(ds.attrs.get("spec", "{}")):
+        raise UserError("boundaries: refined from another sweep (its grid, fixed parameters "
+                        "or method differ from this atlas's)")
+
+
+def boundary_segments(bounds: xr.Dataset, grid_dims: list[str], shape: tuple, x: str, y: str,
+                      panel: dict) -> list:
+    """Line segments through the refined crossings of one panel, cell by cell (marching
+    squares with each edge's crossing bisected instead of interpolated): in each grid cell,
+    two crossings between the same pair of meanings are joined; four are joined in pairs
+    around the cell."""
+    if x not in grid_dims or y not in grid_dims:
+        return []
+    axis = bounds["edge_axis"].values.astype(str)
+    keep = np.isin(axis, [x, y])
+    for dim, value in panel.items():
+        values = bounds[dim].values
+        keep &= (values.astype(str) == str(value)) if values.dtype.kind in "OUS" \
+            else (values == value)
+    index = np.unravel_index(bounds["grid_point"].values, shape)
+    ix, iy = index[grid_dims.index(x)], index[grid_dims.index(y)]
+    px, py = bounds[x].values, bounds[y].values
+    below, above = bounds["side_below"].values, bounds["side_above"].values
+    # a band thinner than any drawing (the crank-rocker's double change point at gamma,
+    # 1e-9 wide) is one crossing between its outer meanings, as a neighbouring edge that
+    # steps over the band sees it
+    rows = []
+    for r in np.flatnonzero(keep):
+        position = px[r] if axis[r] == x else py[r]
+        last = rows[-1] if rows else None
+        if (last is not None and axis[last[0]] == axis[r]
+                and bounds["grid_point"].values[last[0]] == bounds["grid_point"].values[r]
+                and abs(position - last[2]) <= THIN_BAND * max(1.0, abs(position))):
+            rows[-1] = (last[0], last[1], position, int(above[r]))
+        else:
+            rows.append((r, int(below[r]), position, int(above[r])))
+    cells: dict = {}
+    for r, lower, _, upper in rows:
+        pair = frozenset((lower, upper))
+        if axis[r] == x:  # an edge along x borders the cells below and above it
+            around = ((ix[r], iy[r] - 1), (ix[r], iy[r]))
+        else:
+            around = ((ix[r] - 1, iy[r]), (ix[r], iy[r]))
+        for cell in around:
+            cells.setdefault((cell, pair), []).append((px[r], py[r]))
+    segments = []
+    for (cell, _), points in cells.items():
+        if len(points) == 2:
+            segments.append(points)
+        elif len(points) == 4:  # a saddle cell: join neighbours around the cell's centre
+            cx, cy = np.mean(points, axis=0)
+            points = sorted(points, key=lambda p: np.arctan2(p[1] - cy, p[0] - cx))
+            segments += [points[:2], points[2:]]
+    return segments
 
 
 def _angle_ticks(ax, degrees: bool) -> None:

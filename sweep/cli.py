@@ -1,4 +1,5 @@
-"""The ``sweep`` command line (README, "The command line"): run, examples, info, query, chart.
+"""The ``sweep`` command line (README, "The command line"): run, examples, parameters, info,
+query, chart, profile, boundaries.
 
 Exit status 0 on success, 2 on bad input (one line naming the field), 1 on a failure inside.
 """
@@ -41,6 +42,19 @@ def _open_atlas(path: str):
     return ds
 
 
+def _open_boundaries(path: str):
+    import xarray as xr
+
+    p = Path(path)
+    if not p.is_file():
+        raise UserError(f"boundaries: no such file: {p}")
+    try:
+        return xr.open_dataset(p, engine="netcdf4")
+    except Exception as err:
+        raise UserError(f"boundaries: {p} is not a readable netCDF file "
+                        f"({type(err).__name__})") from None
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="impact-sweep")
 def cli():
@@ -76,6 +90,10 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
     chart_path = target.with_suffix(".png") if sweep_spec.chart else None
     if chart_path is not None and chart_path.exists() and not force:
         raise UserError(f"output: {chart_path} exists; use --force to overwrite it")
+    bounds_path = (bounds_target(target) if sweep_spec.chart and sweep_spec.chart.boundaries
+                   else None)
+    if bounds_path is not None:
+        store.check_target(bounds_path, force)
 
     started = time.perf_counter()
     done = runner.run_sweep(sweep_spec, target, chunk=chunk, workers=workers,
@@ -83,14 +101,24 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
                             force=force)
     elapsed = time.perf_counter() - started
     written = _open_atlas(str(target))
+    bounds = None
+    if bounds_path is not None:
+        from sweep.boundaries import refine
+
+        bounds = refine(written, sweep_spec.chart.boundaries, target=bounds_path,
+                        workers=workers, force=True, progress=not quiet)
     if chart_path is not None:
         from sweep.chart import design_chart
 
         c = sweep_spec.chart
-        design_chart(written, c.x, c.y, c.color, chart_path, at=c.at_values())
+        design_chart(written, c.x, c.y, c.color, chart_path, at=c.at_values(),
+                     boundaries=bounds)
     if not quiet:
         counts = status_counts(written)
         click.echo(f"atlas: {target.resolve()}")
+        if bounds_path is not None:
+            click.echo(f"boundaries: {bounds_path.resolve()} ({bounds.sizes['crossing']:,} "
+                       f"crossings of {sweep_spec.chart.boundaries})")
         if chart_path is not None:
             click.echo(f"chart: {chart_path.resolve()}")
         if done["reused"]:
@@ -99,6 +127,65 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
         click.echo(f"{sweep_spec.size} points in {elapsed:.2f} s; status: "
                    + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
     written.close()
+
+
+def bounds_target(atlas: Path) -> Path:
+    """Where the boundaries of an atlas go by default: ATLAS.bounds.nc beside it."""
+    return atlas.with_name(atlas.stem + ".bounds.nc")
+
+
+@cli.command()
+@click.argument("atlas_file", metavar="ATLAS")
+@click.option("--var", default="status", show_default=True,
+              help="flag variable whose boundaries are refined (status, regime, ...)")
+@click.option("--tol", type=float, default=1e-8, show_default=True,
+              help="each crossing to within tol max(1, |x|) in its axis's units")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="boundaries file (default: ATLAS.bounds.nc)")
+@click.option("--force", is_flag=True, help="overwrite an existing boundaries file")
+@click.option("--resume", is_flag=True, help="continue an interrupted run")
+@click.option("--chunk", type=click.IntRange(1, 10**8), help="points per task")
+@click.option("--workers", type=click.IntRange(1, 1024), help="threads (default: all cores)")
+@click.option("-q", "--quiet", is_flag=True, help="no progress or summary")
+def boundaries(atlas_file, var, tol, output, force, resume, chunk, workers, quiet):
+    """Refine every boundary of a flag variable of an atlas (where status or regime changes
+    between neighbouring grid points) to a tolerance, by bisection through the same
+    kernels; write the crossings, with what explains each, to a companion netCDF."""
+    from sweep.boundaries import refine
+
+    ds = _open_atlas(atlas_file)
+    target = Path(output) if output else bounds_target(Path(atlas_file))
+    if target.suffix != ".nc":
+        raise UserError(f"output: {target} must end in .nc")
+    if target.resolve() == Path(atlas_file).resolve():
+        raise UserError("output: would overwrite the atlas itself")
+    started = time.perf_counter()
+    result = refine(ds, var, tol, target=target, workers=workers, chunk=chunk,
+                    resume=resume, force=force, progress=not quiet)
+    ds.close()
+    if quiet:
+        return
+    import collections
+
+    import numpy as np
+
+    meaning = dict(zip(np.atleast_1d(result["side_below"].attrs["flag_values"]).tolist(),
+                       result["side_below"].attrs["flag_meanings"].split()))
+    pairs = collections.Counter(
+        f"{meaning[int(a)]} | {meaning[int(b)]}" for a, b in
+        zip(result["side_below"].values, result["side_above"].values))
+    click.echo(f"boundaries: {target.resolve()}")
+    click.echo(f"{result.sizes['crossing']:,} crossings in {time.perf_counter() - started:.2f} s "
+               f"({result.attrs['kernel_evaluations']:,} kernel evaluations, "
+               f"{result.attrs['rounds']} rounds, to {tol:g})")
+    if not pairs:
+        click.echo(f"  ({var} is the same at every two neighbouring grid points)")
+    for pair, count in pairs.most_common():
+        click.echo(f"  {count:6,}  {pair}")
+    unfollowed = int((result["edge_crossings"].values == 1).sum())
+    if unfollowed:
+        click.echo(f"  {unfollowed:,} crossings lie on edges with more crossings than were "
+                   "followed (see edge_crossings)")
 
 
 @cli.command()
@@ -243,7 +330,9 @@ def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt)
 @click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
               help="take another grid axis at its nearest value, e.g. omega1=60")
 @click.option("--radians", is_flag=True, help="angles in radians (default: degrees)")
-def chart(atlas_file, x, y, color, output, all_status, at, radians):
+@click.option("--boundaries", "bounds_file", default=None, metavar="BOUNDS.nc",
+              help="draw the refined boundaries of `sweep boundaries` as lines")
+def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file):
     """Design chart (PNG) of COLOR over X and Y, with units; a flag variable (regime,
     status) is drawn as categories, cells without a value in greys named by their status."""
     from sweep.chart import design_chart
@@ -252,8 +341,9 @@ def chart(atlas_file, x, y, color, output, all_status, at, radians):
         raise UserError(f"output: {output} must end in .png")
     at_values = _at_values(at)
     ds = _open_atlas(atlas_file)
+    bounds = _open_boundaries(bounds_file) if bounds_file else None
     path = design_chart(ds, x, y, color, Path(output), ok_only=not all_status,
-                        degrees=not radians, at=at_values).path
+                        degrees=not radians, at=at_values, boundaries=bounds).path
     click.echo(f"chart: {path.resolve()}")
 
 

@@ -85,6 +85,18 @@ def block_parameters(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarra
     return params
 
 
+def point_parameters(sweep: Sweep, points: np.ndarray) -> np.ndarray:
+    """The kernel's parameter matrix (n_parameters, n) at grid points given by their flat
+    (C-order) indices."""
+    index = np.unravel_index(np.asarray(points, dtype=np.int64), sweep.shape)
+    params = np.empty((len(sweep.mechanism.parameters), len(index[0])))
+    axis_of = {a.name: j for j, a in enumerate(sweep.axes)}
+    for row, p in enumerate(sweep.mechanism.parameters):
+        j = axis_of.get(p.name)
+        params[row] = sweep.fixed[p.name] if j is None else sweep.axes[j].codes[index[j]]
+    return params
+
+
 def run_block(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
     """Selected outputs, status and profiles of one block, stacked as
     (n_scalar + 1 + n_profile * n_angle, *block_shape)."""

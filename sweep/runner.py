@@ -43,7 +43,7 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
     store = BlockStore(sweep, plan, Path(path), resume, force)
     todo = [(index, loc) for index, loc in plan.locations() if not store.has(index)]
     if todo and not sweep.run.scheduler:
-        _compile_first(sweep, announce=progress)
+        compile_first(sweep, announce=progress)
     bar = tqdm(total=plan.n_blocks, initial=len(store.done), unit="block", delay=1.5,
                disable=not progress, file=sys.stderr, desc="sweep")
 
@@ -66,7 +66,7 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
 COMPILE_NOTICE_AFTER = 0.5  # s: a warm run takes less; numba's first compile far more
 
 
-def _compile_first(sweep, announce: bool) -> None:
+def compile_first(sweep, announce: bool) -> None:
     """Compile the kernels the sweep needs (engine.warm_up) before the blocks start, and
     say so when it takes long: numba compiles on a first run (tens of seconds for the
     pendulum's integration core), and the cache makes later runs start at once. Without

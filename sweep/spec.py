@@ -52,6 +52,7 @@ class ChartSettings(_Strict):
     y: StrictStr
     color: StrictStr
     at: dict[str, float] = {}  # other grid axes taken at one value (nearest)
+    boundaries: StrictStr | None = None  # a flag variable whose boundaries are refined, drawn
 
     def at_values(self) -> dict[str, tuple[float, str]]:
         return {name: (value, "") for name, value in self.at.items()}
@@ -487,6 +488,10 @@ def _chart(model: SpecModel, mech: Mechanism, axes: list[Axis], outputs: list[st
         lo, hi = float(np.min(axis.values)), float(np.max(axis.values))
         if not lo <= value <= hi:
             raise UserError(f"chart.at.{name}: {value:g} is outside the grid, {lo:g} to {hi:g}")
+    flags = ["status"] + [name for name in outputs if mech.output(name).is_flag]
+    if model.chart.boundaries is not None and model.chart.boundaries not in flags:
+        raise UserError(f"chart.boundaries: {model.chart.boundaries!r} is not a flag variable "
+                        "of this sweep; allowed: " + ", ".join(flags))
     if model.chart.color in {p.name for p in mech.profiles}:
         raise UserError(f"chart.color: {model.chart.color!r} is a profile; pick an output "
                         "with one value per design")
