@@ -26,33 +26,39 @@ def _example_text(name: str) -> str:
     return resources.files("sweep.examples").joinpath(EXAMPLES[name]).read_text("utf-8")
 
 
-def _open_atlas(path: str):
+def _open_netcdf(path: str, what: str):
     import xarray as xr
 
     p = Path(path)
     if not p.is_file():
-        raise UserError(f"atlas: no such file: {p}")
+        raise UserError(f"{what}: no such file: {p}")
     try:
-        ds = xr.open_dataset(p, engine="netcdf4")
+        return xr.open_dataset(p, engine="netcdf4")
     except Exception as err:  # netCDF4 raises OSError/RuntimeError/ValueError alike
-        raise UserError(f"atlas: {p} is not a readable netCDF file ({type(err).__name__})") \
-            from None
+        raise UserError(f"{what}: {p} is not a readable netCDF file "
+                        f"({type(err).__name__})") from None
+
+
+def _is_boundaries(ds) -> bool:
+    return "grid_point" in ds and "variable" in ds.attrs
+
+
+def _open_atlas(path: str):
+    ds = _open_netcdf(path, "atlas")
+    p = Path(path)
+    if _is_boundaries(ds):
+        raise UserError(f"atlas: {p} holds the boundaries of an atlas, not an atlas; "
+                        "`sweep info` describes it")
     if "status" not in ds or "mechanism" not in ds.attrs:
         raise UserError(f"atlas: {p} is not an impact-sweep atlas (no status or mechanism)")
     return ds
 
 
 def _open_boundaries(path: str):
-    import xarray as xr
-
-    p = Path(path)
-    if not p.is_file():
-        raise UserError(f"boundaries: no such file: {p}")
-    try:
-        return xr.open_dataset(p, engine="netcdf4")
-    except Exception as err:
-        raise UserError(f"boundaries: {p} is not a readable netCDF file "
-                        f"({type(err).__name__})") from None
+    ds = _open_netcdf(path, "boundaries")
+    if not _is_boundaries(ds):
+        raise UserError(f"boundaries: {path} was not written by `sweep boundaries`")
+    return ds
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -234,10 +240,16 @@ def parameters(mechanism):
 @click.argument("atlas_file", metavar="ATLAS")
 def info(atlas_file):
     """What an atlas's designs were computed with (grid, fixed parameters and method, in words
-    and units), the range of every output, status counts and provenance."""
+    and units), the range of every output, status counts and provenance; for a boundaries
+    file, its crossings by sides with what explains them."""
     from sweep import registry
-    from sweep.describe import atlas_text
+    from sweep.describe import atlas_text, boundaries_text
 
+    ds = _open_netcdf(atlas_file, "atlas")
+    if _is_boundaries(ds):
+        click.echo(boundaries_text(ds, atlas_file))
+        return
+    ds.close()
     ds = _open_atlas(atlas_file)
     name = ds.attrs.get("mechanism", "")
     mech = registry.get(name).declaration if name in registry.names() else None

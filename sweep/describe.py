@@ -235,3 +235,57 @@ def atlas_text(ds, path: str, mech: Mechanism | None) -> str:
                              96, subsequent_indent="  "),
               f"history: {ds.attrs.get('history', '?')}"]
     return "\n".join(lines)
+
+
+def boundaries_text(ds, path: str) -> str:
+    """A boundaries file (``sweep boundaries``) in words: what was refined, how far, and its
+    crossings grouped by the two meanings they separate, with what explains them."""
+    import collections
+
+    var = ds.attrs.get("variable", "?")
+    names = flag_names(ds["side_below"]) or {}
+    below = [names.get(int(c), str(c)) for c in ds["side_below"].values]
+    above = [names.get(int(c), str(c)) for c in ds["side_above"].values]
+    axis = ds["edge_axis"].values.astype(str)
+    explanation = ds["explanation"].values.astype(str)
+    indicator = ds["indicator"].values.astype(str)
+    value = ds["indicator_value"].values
+    n = ds.sizes["crossing"]
+    lines = [*textwrap.wrap(f"{path}: {ds.attrs.get('title', f'boundaries of {var}')}", 96,
+                            subsequent_indent="  "),
+             f"{n:,} crossings, each to {float(ds.attrs.get('tolerance', np.nan)):g} x "
+             f"max(1, |x|) in its axis's units"
+             + (f" (largest reached: {float(ds['accuracy'].max()):.2g})" if n else ""),
+             f"{int(ds.attrs.get('rounds', 0))} bisection rounds, "
+             f"{int(ds.attrs.get('kernel_evaluations', 0)):,} kernel evaluations; code "
+             f"{ds.attrs.get('code_version', '?')} (atlas: "
+             f"{ds.attrs.get('source_code_version', '?')})"]
+    if not n:
+        lines.append(f"{var} is the same at every two neighbouring grid points")
+        return "\n".join(lines)
+    groups = collections.defaultdict(list)
+    for i in range(n):
+        groups[" / ".join(sorted((below[i], above[i])))].append(i)
+    lines += ["", "crossings by the meanings they separate:"]
+    for pair, rows in sorted(groups.items(), key=lambda item: -len(item[1])):
+        along = collections.Counter(axis[rows])
+        lines.append(f"  {len(rows):6,}  {pair}  (along "
+                     + ", ".join(f"{a} {c:,}" for a, c in along.most_common()) + ")")
+        reasons = collections.Counter(explanation[rows]).most_common()
+        for text, count in reasons:
+            lead = f"({count:,}) " if len(reasons) > 1 else ""
+            lines += textwrap.wrap(lead + text, 88, initial_indent=" " * 10,
+                                   subsequent_indent=" " * 10)
+        named = [r for r in rows if indicator[r] and np.isfinite(value[r])]
+        if named:
+            lines.append(f"          {indicator[named[0]]} at the crossings: "
+                         f"{np.min(value[named]):.6g} to {np.max(value[named]):.6g}")
+    continuity = flag_names(ds["continuity"]) or {}
+    counts = collections.Counter(continuity.get(int(c), str(c))
+                                 for c in ds["continuity"].values)
+    lines += ["", "the outputs across them: "
+              + ", ".join(f"{k} {v:,}" for k, v in counts.most_common())]
+    more = int((ds["edge_crossings"].values == 1).sum())
+    if more:
+        lines.append(f"{more:,} crossings lie on edges with more crossings than were followed")
+    return "\n".join(lines)

@@ -284,3 +284,21 @@ def test_boundaries_need_no_profiles_their_scalars_are_the_same_without(example)
     np.testing.assert_array_equal(with_profiles[0], without[0])
     np.testing.assert_array_equal(with_profiles[1], without[1])
     assert without[2].shape[2] == 0
+
+
+def test_info_reads_a_boundaries_file_in_words_and_query_sends_the_user_there(tmp_path,
+                                                                               capsys):
+    ds = atlas(tmp_path, CRANK)
+    target = tmp_path / "atlas.bounds.nc"
+    result = boundaries.refine(ds, "status", 1e-8, target=target)
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["info", str(target)])
+    text = capsys.readouterr().out
+    assert exit_.value.code == 0
+    assert f"{result.sizes['crossing']:,} crossings, each to 1e-08" in text
+    assert "not_assemblable / ok" in text and "gamma at the crossings" in text
+    assert "no_real_synthesis / ok" in text and "restitution_kinematic_max at the" in text
+    with pytest.raises(SystemExit) as exit_:
+        cli.main(["query", str(target)])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and "`sweep info` describes it" in err
