@@ -145,12 +145,7 @@ def test_blade_border_collisions_agree_with_the_H11_bisection(tmp_path):
     from tests.test_pendulum_models import steady
 
     design = dict(model="rigid", k=1.0, kappa=1.2, tool="lab_window")
-    text = ('mechanism = "rotary_pendulum"\n[grid]\ntool_window = '
-            + json.dumps(np.linspace(0.12, 0.3, 10).tolist())
-            + '\n[fixed]\nmodel = "rigid"\nk = 1.0\nkappa = 1.2\ntool = "lab_window"\n'
-            'omega1 = 1.0\nl2 = 1.0\n[method]\nintegrator = "dopri5"\nrtol = 1e-11\n'
-            'atol = 1e-13\n')
-    result = boundaries.refine(atlas(tmp_path, text), "regime", 1e-10)
+    result = boundaries.refine(atlas(tmp_path, BLADE), "regime", 1e-10)
     jumps = np.flatnonzero(result["continuity"].values == 1)  # outputs_jump
     assert jumps.size >= 1
     for i in jumps[:2]:
@@ -167,6 +162,44 @@ def test_blade_border_collisions_agree_with_the_H11_bisection(tmp_path):
                 hi = mid
         assert abs(x - 0.5 * (lo + hi)) <= 2e-10
         assert "border collision" in str(result["explanation"].values[i])
+
+
+BLADE = ('mechanism = "rotary_pendulum"\n[grid]\ntool_window = '
+         + json.dumps(np.linspace(0.12, 0.3, 10).tolist())
+         + '\n[fixed]\nmodel = "rigid"\nk = 1.0\nkappa = 1.2\ntool = "lab_window"\n'
+         'omega1 = 1.0\nl2 = 1.0\n[method]\nintegrator = "dopri5"\nrtol = 1e-11\n'
+         'atol = 1e-13\n')
+
+
+def test_sigkill_mid_run_then_resume_gives_the_same_bits(tmp_path):
+    """A real kill (no clean-up runs) after some rounds were kept: --resume finishes from
+    the last kept round, to the same file as an uninterrupted run."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    ds = atlas(tmp_path, BLADE)
+    whole = boundaries.refine(ds, "regime", 1e-10)
+    target = tmp_path / "atlas.bounds.nc"
+    cmd = [sys.executable, "-m", "sweep", "boundaries", str(tmp_path / "atlas.nc"),
+           "--var", "regime", "--tol", "1e-10", "-q"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    kept = boundaries.partial_dir(target) / "brackets.npz"
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None and not kept.exists():
+        time.sleep(0.02)
+    assert proc.poll() is None, "the run finished before it could be killed"
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert not target.exists() and kept.exists()
+    again = subprocess.run(cmd + ["--resume"], capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr
+    assert not boundaries.partial_dir(target).exists()
+    resumed = xr.open_dataset(target)
+    for name in whole.variables:
+        np.testing.assert_array_equal(whole[name].values, resumed[name].values, err_msg=name)
+    assert resumed.attrs["kernel_evaluations"] == whole.attrs["kernel_evaluations"]
 
 
 CRANK = ('mechanism = "crank_rocker"\n[grid]\nR = {start = 0.05, stop = 0.4, num = 9}\n'
