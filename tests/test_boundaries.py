@@ -335,3 +335,23 @@ def test_info_reads_a_boundaries_file_in_words_and_query_sends_the_user_there(tm
         cli.main(["query", str(target)])
     err = capsys.readouterr().err
     assert exit_.value.code == 2 and "`sweep info` describes it" in err
+
+
+def test_an_edge_with_more_crossings_than_followed_is_marked_and_chunk_invariant(tmp_path):
+    """On the blade at R > 0 the regime alternates faster than the grid: midpoints keep
+    finding third meanings. At most MAX_PER_EDGE crossings an edge are followed, the edge is
+    marked, and which ones are followed does not depend on chunk size or threads."""
+    text = ('mechanism = "rotary_pendulum"\n[grid]\n'
+            'tool_window = {start = 0.1, stop = 0.5, num = 9}\nR = [0.002, 0.004]\n'
+            '[fixed]\nmodel = "rigid"\ntool = "lab_window"\nk = 1.0\nkappa = 1.2\n'
+            'omega1 = 40.0\nl2 = 0.04\n[method]\ntol = 1e-6\nmax_impacts = 200\n')
+    ds = atlas(tmp_path, text)
+    first = boundaries.refine(ds, "regime", 1e-6, workers=1, chunk=3)
+    second = boundaries.refine(ds, "regime", 1e-6, workers=2)
+    marked = first["edge_crossings"].values == 1
+    assert marked.any()
+    per_edge = np.bincount(first["grid_point"].values[marked] * 4
+                           + (first["edge_axis"].values[marked] == "R"))
+    assert per_edge.max() <= boundaries.MAX_PER_EDGE
+    for name in first.variables:
+        np.testing.assert_array_equal(first[name].values, second[name].values, err_msg=name)
