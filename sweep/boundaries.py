@@ -101,6 +101,11 @@ class Request:
         if not self.axes:
             raise UserError("atlas: no numeric grid axis with two or more values, so no "
                             "edge to refine")
+        # axes the kernel only rescales (the pendulum's omega1, l2): where the flag is the
+        # same at each of their values, the boundaries are too; refined once, then repeated
+        self.scale_axes = [d for d in self.axes
+                           if self.sweep.axes[d].name in self.mechanism.whole_axes
+                           and bool(np.all(self.flags == np.take(self.flags, [0], axis=d)))]
         self.source = {"title": ds.attrs.get("title", ""), "spec": ds.attrs["spec"],
                        "code_version": ds.attrs.get("code_version", "")}
 
@@ -133,6 +138,8 @@ def grid_edges(request: Request) -> dict[str, np.ndarray]:
                           below=np.where(swap, f1, f0).astype(np.int8),
                           above=np.where(swap, f0, f1).astype(np.int8)))
     edges = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
+    for d in request.scale_axes:  # refined at the axis's first value only (_replicate)
+        edges = {k: v[(edges["point"] // strides[d]) % shape[d] == 0] for k, v in edges.items()}
     edges["edge"] = np.arange(edges["point"].size)
     edges["done"] = np.zeros(edges["point"].size, bool)
     edges["more"] = np.zeros(edges["point"].size, bool)  # a crossing was left unfollowed
@@ -304,6 +311,10 @@ def refine(ds, var: str = "status", tol: float = 1e-8, target: Path | None = Non
     evaluations += 2 * edges["point"].size
     result.attrs.update(rounds=rounds, kernel_evaluations=evaluations,
                         history=history or history_line())
+    if request.scale_axes:
+        result.attrs["repeated_along"] = (
+            " ".join(request.sweep.axes[d].name for d in request.scale_axes)
+            + ": axes the kernel only rescales; refined at their first value, repeated")
     if target is not None:
         write(result, target)
         state.discard()
@@ -324,10 +335,8 @@ def crossings(request: Request, edges: dict, workers: int):
     """The companion dataset: one row per crossing, sorted by axis, edge and position."""
     import xarray as xr
 
-    order = np.lexsort((edges["lo"], edges["point"], edges["axis"]))
-    e = {k: v[order] for k, v in edges.items()}
+    e = dict(edges)
     n = e["point"].size
-    which = np.arange(n)
     ends = np.concatenate([e["lo"], e["hi"]])
     out, status = evaluate(request.sweep, _parameters(request, {k: np.concatenate([v, v])
                                                                 for k, v in e.items()},
@@ -363,6 +372,13 @@ def crossings(request: Request, edges: dict, workers: int):
             pair = np.array([row[i], row[n + i]])
             if np.isfinite(pair).any():
                 indicator_value[i] = float(np.nanmean(pair))
+    e.update(x=x, accuracy=accuracy, jump=jump, continuity=continuity,
+             explanation=np.array(explanation, dtype=object),
+             indicator=np.array(indicator, dtype=object), indicator_value=indicator_value)
+    e = _replicate(request, e)
+    order = np.lexsort((e["lo"], e["point"], e["axis"]))
+    e = {k: v[order] for k, v in e.items()}
+    x = e["x"]
     index = np.unravel_index(e["point"], request.sweep.shape)
     data = {}
     for d, axis in enumerate(request.sweep.axes):
@@ -399,23 +415,23 @@ def crossings(request: Request, edges: dict, workers: int):
                          f"followed (at most {MAX_PER_EDGE} are)", "units": "1",
             "flag_values": np.array([0, 1], np.int8),
             "flag_meanings": "all_followed more_not_followed"}),
-        "accuracy": ("crossing", accuracy, {
+        "accuracy": ("crossing", e["accuracy"], {
             "long_name": "half-width of the final bracket over max(1, |crossing|): the "
                          "crossing is known to accuracy max(1, |x|) in its axis's units",
             "units": "1"}),
-        "continuity": ("crossing", continuity, {
+        "continuity": ("crossing", e["continuity"], {
             "long_name": "what the outputs do across the final bracket",
             "units": "1", "flag_values": np.array(list(CONTINUITY.values()), np.int8),
             "flag_meanings": " ".join(CONTINUITY)}),
-        "output_jump": ("crossing", jump, {
+        "output_jump": ("crossing", e["jump"], {
             "long_name": "largest relative change of a design output across the final "
                          f"bracket (a jump above {JUMP:g})", "units": "1"}),
-        "explanation": ("crossing", np.array(explanation, dtype=object), {
+        "explanation": ("crossing", e["explanation"], {
             "long_name": "what explains the boundary", "units": "1"}),
-        "indicator": ("crossing", np.array(indicator, dtype=object), {
+        "indicator": ("crossing", e["indicator"], {
             "long_name": "output whose value at the crossing says where the limit is "
                          "(empty: none known)", "units": "1"}),
-        "indicator_value": ("crossing", indicator_value, {
+        "indicator_value": ("crossing", e["indicator_value"], {
             "long_name": "the indicator output at the crossing (mean of the two sides' "
                          "finite values)", "units": "1"}),
     })
@@ -438,6 +454,17 @@ def crossings(request: Request, edges: dict, workers: int):
         package_versions=json.dumps(package_versions()),
     )
     return result
+
+
+def _replicate(request: Request, rows: dict) -> dict:
+    """The crossings refined at the first value of each scale-only axis, repeated at its
+    other values (the same bits: the kernel solves the scaled case once)."""
+    shape = request.flags.shape
+    strides = np.cumprod((1,) + shape[::-1])[::-1][1:]
+    for d in request.scale_axes:
+        copies = [{**rows, "point": rows["point"] + j * strides[d]} for j in range(shape[d])]
+        rows = {k: np.concatenate([c[k] for c in copies]) for k in rows}
+    return rows
 
 
 def write(result, target: Path) -> None:

@@ -355,3 +355,24 @@ def test_an_edge_with_more_crossings_than_followed_is_marked_and_chunk_invariant
     assert per_edge.max() <= boundaries.MAX_PER_EDGE
     for name in first.variables:
         np.testing.assert_array_equal(first[name].values, second[name].values, err_msg=name)
+
+
+def test_a_scale_only_axis_is_refined_once_and_repeated_with_the_same_bits(tmp_path):
+    """omega1 only rescales the pendulum: its boundaries in (k, R) are refined at the first
+    omega1 and repeated. The repeated rows equal, bit for bit, those of atlases with omega1
+    fixed at each value, and the evaluations are those of one value."""
+    grid = ('mechanism = "rotary_pendulum"\n[grid]\nk = {start = 1.0, stop = 2.5, num = 5}\n'
+            'R = {start = 0.0, stop = 0.35, num = 6}\n')
+    both = boundaries.refine(atlas(tmp_path, grid + 'omega1 = [20.0, 60.0]\n'), "regime",
+                             1e-9)
+    assert "omega1" in both.attrs["repeated_along"]
+    for value in (20.0, 60.0):
+        alone = boundaries.refine(atlas(tmp_path, grid + f"[fixed]\nomega1 = {value}\n",
+                                        f"at{value:g}.nc"), "regime", 1e-9)
+        rows = both.sel(crossing=both["omega1"].values == value)
+        assert rows.sizes["crossing"] == alone.sizes["crossing"] > 0
+        for name in alone.variables:
+            if name != "grid_point":  # flat indices of different grids
+                np.testing.assert_array_equal(rows[name].values, alone[name].values,
+                                              err_msg=name)
+        assert both.attrs["kernel_evaluations"] == alone.attrs["kernel_evaluations"]
