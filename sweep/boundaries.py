@@ -37,7 +37,8 @@ from sweep import engine
 from sweep.errors import UserError
 from sweep.metadata import (CONVENTIONS, code_version, flag_codes, history_line,
                             package_versions)
-from sweep.store import check_target, partial_dir
+from sweep.query import flag_names
+from sweep.store import atomic, check_target, open_partial, partial_dir
 
 #: a relative change of the outputs across the final bracket above this is a jump
 JUMP = 1e-3
@@ -94,8 +95,7 @@ class Request:
             raise UserError(f"var: {var!r} is not over the grid axes ({', '.join(dims)})")
         self.flags = np.asarray(ds[var].values, dtype=np.int8)
         self.flag_attrs = {k: ds[var].attrs[k] for k in ("flag_values", "flag_meanings")}
-        self.meaning = dict(zip(np.atleast_1d(ds[var].attrs["flag_values"]).astype(int),
-                                ds[var].attrs["flag_meanings"].split()))
+        self.meaning = flag_names(ds[var])
         self.axes = [d for d, axis in enumerate(self.sweep.axes)
                      if not axis.parameter.categorical and axis.values.size > 1]
         if not self.axes:
@@ -205,13 +205,15 @@ def bisect_round(request: Request, edges: dict, workers: int) -> tuple[dict, int
     to_hi = ~to_lo & (flag == above)
     third = ~to_lo & ~to_hi
     count = np.bincount(edges["edge"], minlength=edges["edge"].max() + 1)
+    capped = []
     for j in np.flatnonzero(third):  # in bracket order: the same splits at any chunk size
         e = edges["edge"][open_[j]]
         if count[e] < MAX_PER_EDGE:
             count[e] += 1
         else:
             third[j] = False
-            edges["more"][edges["edge"] == e] = True
+            capped.append(e)
+    edges["more"] |= np.isin(edges["edge"], capped)
     split = open_[third]
     new = {k: v[split].copy() for k, v in edges.items()}  # [mid, hi] of the split brackets
     new["lo"], new["below"] = mid[third], flag[third]
@@ -227,28 +229,12 @@ class _State:
 
     def __init__(self, request: Request, target: Path, resume: bool, force: bool):
         self.folder = partial_dir(target)
-        self.manifest = {"spec": request.source["spec"], "var": request.var,
-                         "tol": request.tol, "code_version": code_version()}
-        if self.folder.exists() and not resume:
-            if not force:
-                raise UserError(f"output: an interrupted run left {self.folder}; use "
-                                "--resume to continue it or --force to start over")
-            shutil.rmtree(self.folder)
-        elif resume and not self.folder.exists():
-            raise UserError(f"resume: nothing to resume at {self.folder}")
-        if resume:
-            try:
-                old = json.loads((self.folder / "manifest.json").read_text())
-            except (OSError, ValueError):
-                raise UserError(f"resume: {self.folder} has no readable manifest; rerun "
-                                "with --force to start over") from None
-            for key in ("spec", "var", "tol", "code_version"):
-                if old.get(key) != self.manifest[key]:
-                    raise UserError(f"resume: the interrupted run used a different "
-                                    f"{key.replace('_', ' ')}; rerun with --force")
-        else:
-            self.folder.mkdir()
-            (self.folder / "manifest.json").write_text(json.dumps(self.manifest))
+        manifest = {"spec": request.source["spec"], "var": request.var, "tol": request.tol,
+                    "code_version": code_version()}
+        open_partial(self.folder, manifest, {"spec": "spec", "var": "variable",
+                                             "tol": "tolerance",
+                                             "code_version": "code version"},
+                     resume, force)
 
     def load(self):
         path = self.folder / "brackets.npz"
@@ -260,9 +246,8 @@ class _State:
                     int(counters[1]))
 
     def save(self, edges: dict, rounds: int, evaluations: int) -> None:
-        tmp = self.folder / ".brackets.tmp.npz"
-        np.savez(tmp, counters=np.array([rounds, evaluations]), **edges)
-        os.replace(tmp, self.folder / "brackets.npz")
+        with atomic(self.folder / "brackets.npz") as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, counters=np.array([rounds, evaluations]), **edges)
 
     def discard(self) -> None:
         shutil.rmtree(self.folder, ignore_errors=True)
@@ -473,10 +458,5 @@ def write(result, target: Path) -> None:
                 if result[name].dtype == object}
     encoding.update({name: {"_FillValue": None} for name in result.variables
                      if name not in encoding and result[name].dtype.kind in "iu"})
-    tmp = target.with_name(f".{target.name}.tmp-{os.getpid()}")
-    try:
+    with atomic(target) as tmp:
         result.to_netcdf(tmp, engine="netcdf4", encoding=encoding)
-        os.replace(tmp, target)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise

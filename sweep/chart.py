@@ -324,7 +324,8 @@ def boundary_segments(bounds: xr.Dataset, grid_dims: list[str], shape: tuple, x:
         values = bounds[dim].values
         keep &= (values.astype(str) == str(value)) if values.dtype.kind in "OUS" \
             else (values == value)
-    index = np.unravel_index(bounds["grid_point"].values, shape)
+    edge = bounds["grid_point"].values
+    index = np.unravel_index(edge, shape)
     ix, iy = index[grid_dims.index(x)], index[grid_dims.index(y)]
     px, py = bounds[x].values, bounds[y].values
     below, above = bounds["side_below"].values, bounds["side_above"].values
@@ -336,7 +337,7 @@ def boundary_segments(bounds: xr.Dataset, grid_dims: list[str], shape: tuple, x:
         position = px[r] if axis[r] == x else py[r]
         last = rows[-1] if rows else None
         if (last is not None and axis[last[0]] == axis[r]
-                and bounds["grid_point"].values[last[0]] == bounds["grid_point"].values[r]
+                and edge[last[0]] == edge[r]
                 and abs(position - last[2]) <= THIN_BAND * max(1.0, abs(position))):
             rows[-1] = (last[0], last[1], position, int(above[r]))
         else:

@@ -173,10 +173,9 @@ def boundaries(atlas_file, var, tol, output, force, resume, chunk, workers, quie
         return
     import collections
 
-    import numpy as np
+    from sweep.query import flag_names
 
-    meaning = dict(zip(np.atleast_1d(result["side_below"].attrs["flag_values"]).tolist(),
-                       result["side_below"].attrs["flag_meanings"].split()))
+    meaning = flag_names(result["side_below"])
     pairs = collections.Counter(
         f"{meaning[int(a)]} | {meaning[int(b)]}" for a, b in
         zip(result["side_below"].values, result["side_above"].values))

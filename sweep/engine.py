@@ -67,34 +67,35 @@ def warm_up(sweep: Sweep) -> None:
     sweep.kernel(sample_parameters(sweep), sweep.method_record)
 
 
-def block_parameters(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
-    """The kernel's parameter matrix (n_parameters, n_points) for one block of the grid."""
-    bshape = tuple(stop - start for start, stop in location)
-    params = np.empty((len(sweep.mechanism.parameters), math.prod(bshape)))
+def _parameter_matrix(sweep: Sweep, n: int, axis_values) -> np.ndarray:
+    """The kernel's parameter matrix (n_parameters, n): a fixed parameter's code in its row,
+    ``axis_values(j)`` (the n codes of grid axis j) in the row of an axis's parameter."""
+    params = np.empty((len(sweep.mechanism.parameters), n))
     axis_of = {axis.name: j for j, axis in enumerate(sweep.axes)}
     for row, p in enumerate(sweep.mechanism.parameters):
         j = axis_of.get(p.name)
-        if j is None:
-            params[row] = sweep.fixed[p.name]
-            continue
+        params[row] = sweep.fixed[p.name] if j is None else axis_values(j)
+    return params
+
+
+def block_parameters(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
+    """The kernel's parameter matrix (n_parameters, n_points) for one block of the grid."""
+    bshape = tuple(stop - start for start, stop in location)
+
+    def axis_values(j):
         start, stop = location[j]
         view = [1] * len(bshape)
         view[j] = stop - start
-        params[row] = np.broadcast_to(sweep.axes[j].codes[start:stop].reshape(view),
-                                      bshape).ravel()
-    return params
+        return np.broadcast_to(sweep.axes[j].codes[start:stop].reshape(view), bshape).ravel()
+
+    return _parameter_matrix(sweep, math.prod(bshape), axis_values)
 
 
 def point_parameters(sweep: Sweep, points: np.ndarray) -> np.ndarray:
     """The kernel's parameter matrix (n_parameters, n) at grid points given by their flat
-    (C-order) indices."""
+    (C-order) indices (``sweep boundaries`` moves one axis's row between them)."""
     index = np.unravel_index(np.asarray(points, dtype=np.int64), sweep.shape)
-    params = np.empty((len(sweep.mechanism.parameters), len(index[0])))
-    axis_of = {a.name: j for j, a in enumerate(sweep.axes)}
-    for row, p in enumerate(sweep.mechanism.parameters):
-        j = axis_of.get(p.name)
-        params[row] = sweep.fixed[p.name] if j is None else sweep.axes[j].codes[index[j]]
-    return params
+    return _parameter_matrix(sweep, len(index[0]), lambda j: sweep.axes[j].codes[index[j]])
 
 
 def run_block(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:

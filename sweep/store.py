@@ -8,6 +8,7 @@ temporary name and renamed, so a file at the target is always a whole atlas.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -37,6 +38,48 @@ def partial_dir(path: Path) -> Path:
     return path.with_name(f".{path.name}.partial")
 
 
+@contextlib.contextmanager
+def atomic(path: Path):
+    """A temporary name beside ``path`` to write to: renamed to ``path`` when the block
+    succeeds, removed when it fails, so a file at ``path`` is always whole."""
+    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def open_partial(folder: Path, manifest: dict, compared: dict, resume: bool,
+                 force: bool) -> bool:
+    """The folder where an interrupted run keeps its state: created new (its manifest
+    written), or, with ``resume``, checked against the manifest (each key of ``compared``,
+    named in words by its value, must match). Never silently discarded: without resume or
+    force an existing one is refused. Returns whether the run resumes."""
+    if folder.exists():
+        if resume:
+            try:
+                old = json.loads((folder / "manifest.json").read_text())
+            except (OSError, ValueError):
+                raise UserError(f"resume: {folder} has no readable manifest; rerun with "
+                                "--force to start over") from None
+            for key, what in compared.items():
+                if old.get(key) != manifest[key]:
+                    raise UserError(f"resume: the interrupted run used a different {what}; "
+                                    "rerun with --force to start over")
+            return True
+        if not force:
+            raise UserError(f"output: an interrupted run left {folder}; use --resume to "
+                            "continue it or --force to start over")
+        shutil.rmtree(folder)
+    elif resume:
+        raise UserError(f"resume: nothing to resume at {folder}")
+    folder.mkdir()
+    (folder / "manifest.json").write_text(json.dumps(manifest))
+    return False
+
+
 def block_name(index) -> str:
     return "b" + "_".join(str(i) for i in index)
 
@@ -53,41 +96,18 @@ class BlockStore:
                     "chunk_shape": list(plan.chunk_shape), "rows": plan.rows,
                     "blocks": plan.n_blocks}
         self.done: set[str] = set()
-        if self.folder.exists():
-            if resume:
-                self.done = self._resumable(manifest)
-                return
-            if not force:
-                raise UserError(f"output: an interrupted run left {self.folder}; use "
-                                "--resume to continue it or --force to start over")
-            shutil.rmtree(self.folder)
-        elif resume:
-            raise UserError(f"resume: nothing to resume at {self.folder}")
-        self.folder.mkdir()
-        (self.folder / "manifest.json").write_text(json.dumps(manifest))
-
-    def _resumable(self, manifest: dict) -> set[str]:
-        try:
-            old = json.loads((self.folder / "manifest.json").read_text())
-        except (OSError, ValueError):
-            raise UserError(f"resume: {self.folder} has no readable manifest; rerun with "
-                            "--force to start over") from None
-        for key, what in (("spec", "spec"), ("code_version", "code version"),
-                          ("chunk_shape", "chunk size")):
-            if old.get(key) != manifest[key]:
-                raise UserError(f"resume: the interrupted run used a different {what}; "
-                                "rerun with --force to start over")
-        return {name[:-4] for name in os.listdir(self.folder)
-                if name.endswith(".npy") and not name.startswith(".")}
+        compared = {"spec": "spec", "code_version": "code version",
+                    "chunk_shape": "chunk size"}
+        if open_partial(self.folder, manifest, compared, resume, force):
+            self.done = {name[:-4] for name in os.listdir(self.folder)
+                         if name.endswith(".npy") and not name.startswith(".")}
 
     def has(self, index) -> bool:
         return block_name(index) in self.done
 
     def save(self, index, block: np.ndarray) -> None:
-        name = block_name(index)
-        with open(self.folder / f".{name}.tmp", "wb") as fh:
+        with atomic(self.folder / f"{block_name(index)}.npy") as tmp, open(tmp, "wb") as fh:
             np.save(fh, block)
-        os.replace(self.folder / f".{name}.tmp", self.folder / f"{name}.npy")
 
     def load(self, index) -> np.ndarray:
         return np.load(self.folder / f"{block_name(index)}.npy")
@@ -104,18 +124,12 @@ def write_atlas(store: BlockStore, plan, path: Path, history: str) -> None:
 
     template = build(plan.sweep)
     template.attrs["history"] = history
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
-            _define(nc, template)
-            for index, location in plan.locations():
-                region = tuple(slice(a, b) for a, b in location)
-                for name, values in plan.split(store.load(index)).items():
-                    nc[name][region] = values
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    with atomic(path) as tmp, netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
+        _define(nc, template)
+        for index, location in plan.locations():
+            region = tuple(slice(a, b) for a, b in location)
+            for name, values in plan.split(store.load(index)).items():
+                nc[name][region] = values
 
 
 def _define(nc, ds) -> None:

@@ -19,6 +19,7 @@ from scipy.optimize import brentq
 
 from sweep import boundaries, cli, runner, spec
 from sweep.errors import UserError
+from sweep.query import flag_names
 
 RNG_SEED = 20261123
 
@@ -31,8 +32,7 @@ def atlas(tmp_path, text, name="atlas.nc"):
 
 def pairs(result):
     """The crossings' sides as sets of meanings."""
-    meaning = dict(zip(np.atleast_1d(result["side_below"].attrs["flag_values"]).tolist(),
-                       result["side_below"].attrs["flag_meanings"].split()))
+    meaning = flag_names(result["side_below"])
     return [frozenset((meaning[int(a)], meaning[int(b)])) for a, b in
             zip(result["side_below"].values, result["side_above"].values)]
 
