@@ -105,6 +105,8 @@ class Output:
     echoes: str | None = None
     marks: tuple = ()
     diagnostic: bool = False  # a count or estimate of the computation, not a design value
+    #: computed only when a spec lists it in ``outputs`` (it costs work the others do not)
+    on_request: bool = False
 
 
     @property
@@ -239,11 +241,17 @@ class Mechanism:
 
     @cached_property
     def method_type(self):
-        return namedtuple("Method", [m.name for m in self.method])
+        return namedtuple("Method", [m.name for m in self.method] + ["outputs"])
 
-    def method_record(self, **given):
+    @property
+    def default_outputs(self) -> tuple[str, ...]:
+        """The scalar outputs an atlas has when its spec does not list them."""
+        return tuple(o.name for o in self.outputs if not o.on_request)
+
+    def method_record(self, outputs=None, **given):
         """The kernel's method options by name: codes of the given values, defaults
-        elsewhere (int for whole-number and categorical keys, float otherwise)."""
+        elsewhere (int for whole-number and categorical keys, float otherwise), and
+        ``outputs``, the names the sweep asks for (the kernel computes no more)."""
         unknown = set(given) - {m.name for m in self.method}
         if unknown:
             raise KeyError(f"{self.name}: unknown method keys {sorted(unknown)}")
@@ -251,7 +259,8 @@ class Mechanism:
         for m in self.method:
             code = m.encode(given.get(m.name, m.default))
             values.append(int(code) if (m.integer or m.categorical) else code)
-        return self.method_type(*values)
+        asked = self.default_outputs if outputs is None else tuple(outputs)
+        return self.method_type(*values, asked)
 
 
 # ---------------------------------------------------------------- shared declarations

@@ -14,6 +14,7 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS
 from kernels.declaration import POSITIVE, Boundary, Mechanism, Output, Quantity
+from kernels.impact.impact_map import radical_inverse
 from kernels.impact.outcomes import (SEQUENCE_CYCLE, SEQUENCE_DEGENERATE, SEQUENCE_ESCAPE,
                                      SEQUENCE_MAX_STEPS, SEQUENCE_NO_IMPACT,
                                      SEQUENCE_NONFINITE, SEQUENCE_NOT_PERIODIC,
@@ -45,7 +46,19 @@ def _rules(given: dict) -> str | None:
             "rotor" in models or "lab_window" in tools):
         return ("method.integrator: \"closed_form\" exists only for the paper and rigid "
                 "models on the rotor stop; allowed here: \"auto\", \"rk4\", \"dopri5\"")
+    if max(given.get("method.starts", {1})) > 1 and not given.get("outputs", set()) & set(
+            ATTRACTOR_OUTPUTS):
+        return ("method.starts: more than one start is used only with the outputs "
+                "attractor_count or basin_fraction; add one to outputs, or omit starts")
+    if "edge_margin" in given.get("outputs", ()) and "lab_window" not in tools:
+        return ("outputs: edge_margin exists only with tool = \"lab_window\" (the rotor "
+                "stop has no edge)")
     return None
+
+
+#: outputs that need the tangent of the steady cycle, and the ones that need several starts
+STABILITY_OUTPUTS = ("multiplier_modulus", "multiplier_angle", "stability_margin")
+ATTRACTOR_OUTPUTS = ("attractor_count", "basin_fraction")
 
 
 DECLARATION = Mechanism(
@@ -131,9 +144,35 @@ DECLARATION = Mechanism(
         Output("n_events", "1", "impact events located by the integrator", diagnostic=True),
         Output("method_used", "1", "method that produced the values",
                flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5}),
+        Output("multiplier_modulus", "1", "largest modulus |mu| of the multipliers of the "
+               "steady cycle's impact map (of its n-fold map for period_n; exact symmetries "
+               "removed): below 1 the pattern is stable; R on the rotor stop at constant rotor "
+               "speed; by the variational equations, the event-time saltation and Newton's "
+               "law differentiated; NaN without a cycle, and where the cycle accumulates a "
+               "chatter or the rotor model slides on the blade (no tangent there)", "|μ|",
+               on_request=True),
+        Output("multiplier_angle", "rad", "argument of the leading multiplier in [0, pi]: "
+               "near 0 as |mu| -> 1 a fold (the pattern vanishes), pi a period doubling, "
+               "between a complex pair (quasi-periodic motion)", "arg μ", on_request=True),
+        Output("stability_margin", "1", "1 - multiplier_modulus: how far the blow pattern is "
+               "from losing stability (negative: unstable)", on_request=True),
+        Output("impact_speed_min_ratio", "1", "slowest impact of the steady cycle over its "
+               "fastest (striker normal speeds, all contacts of the cycle): near 0 the "
+               "pattern is one small change from chatter or grazing", on_request=True),
+        Output("edge_margin", "rad", "lab_window: the smallest distance window - |psi| of a "
+               "steady-cycle impact from the blade's edge: near 0 a border collision (the "
+               "impact slips past the edge)", on_request=True),
+        Output("attractor_count", "1", "distinct steady states reached from method.starts "
+               "starting states (rest, then a Halton sequence of arrival states): regime, "
+               "period and section state equal to 1e-6; each non-periodic outcome counts "
+               "as one", on_request=True),
+        Output("basin_fraction", "1", "share of the starts that reach the steady state "
+               "reported (the one reached from rest, the machine's start-up)",
+               on_request=True),
         Output("error_estimate", "1", "auto: estimated relative error of the steady cycle's "
                "values (the largest over amplitude, frequency ratio, period, impact speed "
-               "and interval, acceleration peak, rotor speed ratio), from two DOPRI5 solves "
+               "and interval, acceleration peak, rotor speed ratio, and the leading multiplier "
+               "where asked for), from two DOPRI5 solves "
                "8 times apart in rtol; 0 by the closed form; inf where the two solves reach "
                "different regimes; NaN with a fixed integrator or without a cycle",
                diagnostic=True),
@@ -160,6 +199,9 @@ DECLARATION = Mechanism(
                  maximum=10**6, integer=True),
         Quantity("tol", "1", "auto: relative accuracy requested of the outputs",
                  default=1e-8, minimum=1e-11, maximum=1e-2, used_when={"integrator": ("auto",)}),
+        Quantity("starts", "1", "starting states per design for attractor_count and "
+                 "basin_fraction (1: from rest only; each start costs a steady state)",
+                 default=1, minimum=1, maximum=1000, integer=True),
     ),
     rules=_rules,
     whole_axes=("omega1", "l2"),
@@ -275,18 +317,23 @@ AUTO_REFINE = 8.0
 AUTO_ROUNDS = 3
 
 
-def solve_system(block, sub, method_code, rtol, atol, dt, max_impacts):
+def solve_system(block, sub, method_code, rtol, atol, dt, max_impacts, starts=1):
     """The rows of the cases of one system, by one integrator at one tolerance."""
     out = np.empty((sub.shape[0], N_ROW))
-    block(sub, method_code, rtol, atol, dt, max_impacts, out, np.empty((1, 2)))
+    block(sub, method_code, rtol, atol, dt, max_impacts, starts, out, np.empty((1, 2)))
     return out
 
 
 def estimated_error(coarse, fine):
     """Relative difference of the cycle's values of two solves over the finer one's error
     ratio: the estimated relative error of the finer solve; inf where the two disagree on
-    the outcome, the period or the chatter; NaN where neither has a cycle."""
+    the outcome, the period or the chatter; NaN where neither has a cycle. The leading
+    multiplier (where asked for) counts on the unit circle's scale, |dmu|/max(1, |mu|): it
+    may be 0, and a sensitive blade design's multiplier was 1.3e-5 off at tol 1e-8 while
+    the other values met it."""
     values = [np.abs(coarse[:, j] - fine[:, j]) / np.abs(fine[:, j]) for j in ESTIMATED]
+    mu = [rows[:, ROW.modulus] * np.exp(1j * rows[:, ROW.angle]) for rows in (coarse, fine)]
+    values.append(np.abs(mu[0] - mu[1]) / np.maximum(1.0, np.abs(mu[1])))
     with np.errstate(invalid="ignore"):
         diff = np.nanmax(np.where(np.isnan(values), -np.inf, values), axis=0)
     error = diff / (AUTO_REFINE - 1.0)
@@ -297,19 +344,19 @@ def estimated_error(coarse, fine):
     return np.where(same & (fine[:, ROW.outcome] != SEQUENCE_CYCLE), np.nan, error)
 
 
-def solve_auto(block, sub, tol, max_impacts):
+def solve_auto(block, sub, tol, max_impacts, starts=1):
     """auto on a system without a closed form: DOPRI5 at AUTO_COARSE times the calibrated
     rtol and AUTO_REFINE times finer, refined further where the estimate misses tol / 2. Counters
     add up every solve."""
     rtol = AUTO_COARSE * auto_rtol(tol)
     coarse = solve_system(block, sub, METHOD_DOPRI5, rtol, rtol * AUTO_ATOL_PER_RTOL, 0.0,
-                          max_impacts)
+                          max_impacts, starts)
     rows = coarse.copy()
     pending = np.arange(sub.shape[0])
     for _ in range(AUTO_ROUNDS):
         rtol /= AUTO_REFINE
         fine = solve_system(block, sub[pending], METHOD_DOPRI5, max(rtol, 1e-14),
-                            max(rtol, 1e-14) * AUTO_ATOL_PER_RTOL, 0.0, max_impacts)
+                            max(rtol, 1e-14) * AUTO_ATOL_PER_RTOL, 0.0, max_impacts, starts)
         error = estimated_error(coarse, fine)
         counters = [ROW.steps, ROW.rejected, ROW.events]
         fine[:, counters] += rows[np.ix_(pending, counters)]
@@ -322,38 +369,66 @@ def solve_auto(block, sub, tol, max_impacts):
     return rows
 
 
-def solve_cases(cases, method):
+def driven_stop_margins(cases, rows, starts):
+    """The margins of the constant-speed models on the rotor stop in closed form: one impact
+    a cycle (speed ratio 1), the affine map's multiplier R (P-O6); from start j, arriving at
+    u_j = 2 (1 + k) x_j (the tool's ``first``), the first launch (1 + k)(1 + R) + R u_j
+    escapes iff it reaches v_crit, else the map contracts to v* (the one attractor)."""
+    cycle = rows[:, ROW.outcome] == SEQUENCE_CYCLE
+    k, r = cases[:, C.k], cases[:, C.R]
+    rows[:, ROW.speed_ratio] = np.where(cycle, 1.0, np.nan)
+    rows[:, ROW.modulus] = np.where(cycle, r, np.nan)
+    rows[:, ROW.angle] = np.where(cycle, 0.0, np.nan)
+    rows[:, ROW.attractors], rows[:, ROW.basin] = 1.0, 1.0
+    if starts > 1:
+        r_crit = rows[:, ROW.restitution_critical]
+        v_crit = (1.0 + k) * (1.0 + r_crit) / (1.0 - r_crit)
+        arrival = np.array([2.0 * radical_inverse(j, 2) for j in range(1, starts)])
+        launch = ((1.0 + k) * (1.0 + r))[:, None] + r[:, None] * (1.0 + k)[:, None] * arrival
+        escaping = (launch >= v_crit[:, None]).sum(axis=1)
+        rows[:, ROW.attractors] = np.where(cycle & (escaping > 0), 2.0, 1.0)
+        rows[:, ROW.basin] = np.where(cycle, (starts - escaping) / starts, 1.0)
+
+
+def solve_cases(cases, method, stability=False, starts=1):
     """The result row (cases.ROW) of every case, in omega1 units: closed form where the
     model has one and the method allows it, else the integration core on the case's
-    system (imported, and compiled, only when a block has a case of it)."""
+    system (imported, and compiled, only when a block has a case of it; with
+    ``stability`` the system's block that carries the tangent, where one is needed).
+    ``starts``: starting states per case for the attractor count."""
     rows = np.empty((cases.shape[0], N_ROW))
     model, tool = cases[:, C.model], cases[:, C.tool]
     driven_stop = (model != MODEL_ROTOR) & (tool == TOOL_ROTOR_STOP)
     closed = driven_stop & (method.integrator <= INTEGRATOR_CLOSED)
     if closed.any():
         rows_closed = np.empty((int(closed.sum()), N_ROW))
-        closed_form_block(np.ascontiguousarray(cases[closed]), rows_closed)
+        sub = np.ascontiguousarray(cases[closed])
+        closed_form_block(sub, rows_closed)
         rows_closed[:, ROW.method] = USED_CLOSED
         # exact to round-off: the estimate auto reports is 0 where there is a cycle
         rows_closed[:, ROW.error] = np.where(
             rows_closed[:, ROW.outcome] == SEQUENCE_CYCLE,
             0.0 if method.integrator == INTEGRATOR_AUTO else np.nan, np.nan)
+        driven_stop_margins(sub, rows_closed, starts)
         rows[closed] = rows_closed
     integrated = ~closed
     if integrated.any():
-        from kernels.pendulum.systems import SYSTEMS
+        from kernels.pendulum.systems import SYSTEMS, TANGENT_SYSTEMS
 
         rk4 = method.integrator == INTEGRATOR_RK4
         for (m, t), block in SYSTEMS.items():
             chosen = integrated & (model == m) & (tool == t)
             if not chosen.any():
                 continue
+            if stability:
+                block = TANGENT_SYSTEMS.get((m, t), block)
             sub = np.ascontiguousarray(cases[chosen])
             if method.integrator == INTEGRATOR_AUTO:
-                out = solve_auto(block, sub, method.tol, method.max_impacts)
+                out = solve_auto(block, sub, method.tol, method.max_impacts, starts)
             else:
                 out = solve_system(block, sub, METHOD_RK4 if rk4 else METHOD_DOPRI5,
-                                   method.rtol, method.atol, method.dt, method.max_impacts)
+                                   method.rtol, method.atol, method.dt, method.max_impacts,
+                                   starts)
                 out[:, ROW.error] = np.nan
             out[:, ROW.method] = USED_RK4 if rk4 else USED_DOPRI5
             if t == TOOL_ROTOR_STOP and m != MODEL_ROTOR:
@@ -362,6 +437,9 @@ def solve_cases(cases, method):
                     v, v_crit, escapes, separatrix = driven_stop_preamble(sub[j], tol, out[j])
                     if separatrix:
                         out[j, ROW.outcome] = SEQUENCE_SEPARATRIX
+                cycle = out[:, ROW.outcome] == SEQUENCE_CYCLE
+                out[:, ROW.modulus] = np.where(cycle, sub[:, C.R], np.nan)  # the affine map
+                out[:, ROW.angle] = np.where(cycle, 0.0, np.nan)
             rows[chosen] = out
     return rows
 
@@ -391,7 +469,9 @@ def run(params, method):
     keys = np.stack([np.where(used[name], p[name], 0.0) if name in used else p[name]
                      for name in CASE_COLUMNS], axis=1)
     cases, index = distinct_rows(keys)
-    d = solve_cases(cases, method)[index].T
+    asked = set(method.outputs)
+    starts = method.starts if asked & set(ATTRACTOR_OUTPUTS) else 1
+    d = solve_cases(cases, method, bool(asked & set(STABILITY_OUTPUTS)), starts)[index].T
     outcome = d[ROW.outcome].astype(np.int64)
     status = _STATUS_OF[outcome]
     cycle = outcome == SEQUENCE_CYCLE
@@ -416,10 +496,19 @@ def run(params, method):
     out[O.n_events] = d[ROW.events]
     out[O.method_used] = d[ROW.method]
     out[O.error_estimate] = d[ROW.error]
+    out[O.multiplier_modulus] = d[ROW.modulus]
+    out[O.multiplier_angle] = d[ROW.angle]
+    out[O.stability_margin] = 1.0 - d[ROW.modulus]
+    out[O.impact_speed_min_ratio] = d[ROW.speed_ratio]
+    out[O.edge_margin] = d[ROW.edge]
+    out[O.attractor_count] = d[ROW.attractors]
+    out[O.basin_fraction] = d[ROW.basin]
     # values of a steady cycle exist only where there is one: an integrated run launched on
     # the separatrix comes back with finite numbers of a cycle whose period is infinite
     cycle_values = [O.amplitude, O.frequency_ratio, O.period, O.impact_speed, O.impact_interval,
-                    O.acceleration_peak, O.rotor_speed_ratio, O.error_estimate]
+                    O.acceleration_peak, O.rotor_speed_ratio, O.error_estimate,
+                    O.multiplier_modulus, O.multiplier_angle, O.stability_margin,
+                    O.impact_speed_min_ratio, O.edge_margin]
     out[np.ix_(cycle_values, ~cycle)] = np.nan
     # a steady cycle whose values did not come out finite is not a design value
     values = out[[O.amplitude, O.impact_speed, O.impact_interval, O.acceleration_peak]]

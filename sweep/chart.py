@@ -114,12 +114,14 @@ def _panel_title(ds: xr.Dataset, dim: str, k: int, degrees: bool) -> str:
 
 def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                  ok_only: bool = True, degrees: bool = True, at: dict | None = None,
-                 boundaries: xr.Dataset | None = None) -> Drawn:
+                 boundaries: xr.Dataset | None = None, overlay: str | None = None) -> Drawn:
     """Chart of ``color`` over (x, y), one panel per value of the other grid axis of more than
     one value (at most three panels a row). ``ok_only``: cells whose status has no design
     values are drawn as their status, not as a value; ``degrees``: angles in degrees;
     ``at``: take other grid axes at one value ({axis: (value, "" or "deg")});
-    ``boundaries``: the refined crossings of ``sweep boundaries``, drawn as lines."""
+    ``boundaries``: the refined crossings of ``sweep boundaries``, drawn as lines;
+    ``overlay``: a numeric output drawn as labelled contour lines over the colours (the
+    stability margin over a regime map), where it has a design value."""
     import matplotlib
     import matplotlib.colors as mcolors
     import matplotlib.ticker as ticker
@@ -141,6 +143,13 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                         "`sweep query --at` for its value at one angle")
     if ds[color].dtype.kind in "OUS":
         raise UserError(f"color: {color!r} is categorical; pick a numeric or flag variable")
+    if overlay is not None:
+        if overlay not in ds.data_vars or "flag_meanings" in ds[overlay].attrs or any(
+                d not in grid_dims for d in ds[overlay].dims):
+            numeric = [n for n, v in ds.data_vars.items() if "flag_meanings" not in v.attrs
+                       and set(v.dims) <= set(grid_dims) and n != "status"]
+            raise UserError(f"overlay: {overlay!r} is not a numeric output of this atlas; "
+                            "allowed: " + ", ".join(numeric))
     if boundaries is not None:
         check_boundaries(ds, boundaries)
     grid_shape = ds["status"].shape
@@ -202,6 +211,13 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     if is_flag:
         marks = ()
     x_values, y_values = _shown(ds[x], degrees), _shown(ds[y], degrees)
+    if overlay is not None:
+        lay = _shown(ds[overlay], degrees).astype(float)
+        lay = xr.DataArray(np.where(usable_mask(ds).values if ok_only else True, lay, np.nan),
+                           dims=ds[overlay].dims)
+        finite = lay.values[np.isfinite(lay.values)]
+        overlay_levels = (ticker.MaxNLocator(5).tick_values(finite.min(), finite.max())
+                          if finite.size else [])
     mesh = None
     for ax, k in zip(axes.ravel(), panels):
         pick = {} if k is None else {facet_dims[0]: k}
@@ -223,6 +239,15 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                           else 1.0 for n in (x, y))
                 segments = [[(a * fx, b * fy) for a, b in seg] for seg in segments]
                 ax.add_collection(LineCollection(segments, colors="black", linewidths=1.3))
+            if overlay is not None:
+                lay_panel = lay.isel(pick) if pick else lay
+                lay_panel = lay_panel.squeeze([d for d in lay_panel.dims if d not in (x, y)],
+                                              drop=True).transpose(y, x).values
+                lay_panel = _without_jumps(lay_panel)
+                if np.isfinite(lay_panel).sum() > 4 and len(overlay_levels):
+                    lines = ax.contour(x_values, y_values, lay_panel, levels=overlay_levels,
+                                       colors="black", linewidths=0.9, linestyles="-")
+                    ax.clabel(lines, fontsize=7, fmt=_number, inline_spacing=2)
             if not is_flag and np.isfinite(grid).sum() > 4:
                 if len(levels):
                     lines = ax.contour(x_values, y_values, grid, levels=levels, norm=norm,
@@ -250,6 +275,9 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     for ax in axes.ravel()[len(panels):]:
         ax.set_visible(False)
     handles = []
+    if overlay is not None:
+        handles.append(plt.Line2D([], [], color="black", lw=0.9,
+                                  label=f"{_label(ds, overlay, degrees)} (contour lines)"))
     if boundaries is not None:
         handles.append(plt.Line2D([], [], color="black", lw=1.3, label=(
             f"boundaries of {boundaries.attrs.get('variable')}, refined to "
@@ -360,6 +388,26 @@ def boundary_segments(bounds: xr.Dataset, grid_dims: list[str], shape: tuple, x:
             points = sorted(points, key=lambda p: np.arctan2(p[1] - cy, p[0] - cx))
             segments += [points[:2], points[2:]]
     return segments
+
+
+def _without_jumps(grid: np.ndarray) -> np.ndarray:
+    """The grid with the cells beside a jump of more than a quarter of its range blanked:
+    contour lines of an overlay follow its smooth variation inside a regime instead of
+    piling up where the regime (and the overlay with it) jumps."""
+    finite = grid[np.isfinite(grid)]
+    if finite.size < 2:
+        return grid
+    limit = 0.25 * (finite.max() - finite.min())
+    jump = np.zeros(grid.shape, bool)
+    for axis in (0, 1):
+        step = np.abs(np.diff(grid, axis=axis)) > limit
+        lead = [slice(None)] * 2
+        lead[axis] = slice(1, None)
+        trail = [slice(None)] * 2
+        trail[axis] = slice(None, -1)
+        jump[tuple(lead)] |= step
+        jump[tuple(trail)] |= step
+    return np.where(jump, np.nan, grid)
 
 
 def _angle_ticks(ax, degrees: bool) -> None:

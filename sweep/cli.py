@@ -118,7 +118,7 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
 
         c = sweep_spec.chart
         design_chart(written, c.x, c.y, c.color, chart_path, at=c.at_values(),
-                     boundaries=bounds)
+                     boundaries=bounds, overlay=c.overlay)
     if not quiet:
         counts = status_counts(written)
         click.echo(f"atlas: {target.resolve()}")
@@ -343,7 +343,10 @@ def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt)
 @click.option("--radians", is_flag=True, help="angles in radians (default: degrees)")
 @click.option("--boundaries", "bounds_file", default=None, metavar="BOUNDS.nc",
               help="draw the refined boundaries of `sweep boundaries` as lines")
-def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file):
+@click.option("--overlay", default=None, metavar="NAME",
+              help="a numeric output drawn as labelled contour lines on top, e.g. "
+                   "stability_margin over the regime")
+def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file, overlay):
     """Design chart (PNG) of COLOR over X and Y, with units; a flag variable (regime,
     status) is drawn as categories, cells without a value in greys named by their status."""
     from sweep.chart import design_chart
@@ -354,7 +357,8 @@ def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file)
     ds = _open_atlas(atlas_file)
     bounds = _open_boundaries(bounds_file) if bounds_file else None
     path = design_chart(ds, x, y, color, Path(output), ok_only=not all_status,
-                        degrees=not radians, at=at_values, boundaries=bounds).path
+                        degrees=not radians, at=at_values, boundaries=bounds,
+                        overlay=overlay).path
     click.echo(f"chart: {path.resolve()}")
 
 

@@ -46,10 +46,13 @@ def mechanism_text(mech: Mechanism) -> str:
         lines += ["", "method keys ([method]):"]
         lines += _quantity_rows(mech.method)
     width = max(len(o.name) for o in mech.outputs + mech.profiles)
-    lines += ["", "outputs:"]
+    lines += ["", "outputs (all but the ones on request, unless the spec lists them in "
+                  "outputs = [...]):"]
     for o in mech.outputs:
         kind = (" flag: " + ", ".join(o.flags)) if o.is_flag else ""
-        lines.append(f"  {o.name:{width}s}  [{units_text(o.units)}]  {o.long_name}{kind}")
+        asked = " (on request)" if o.on_request else ""
+        lines.append(f"  {o.name:{width}s}  [{units_text(o.units)}]{asked}  {o.long_name}"
+                     f"{kind}")
     if mech.profiles:
         lines += ["", f"profiles over {mech.profile_dim.name} "
                       f"[{units_text(mech.profile_dim.units)}] (set method.profile_points):"]

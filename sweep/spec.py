@@ -53,6 +53,7 @@ class ChartSettings(_Strict):
     color: StrictStr
     at: dict[str, float] = {}  # other grid axes taken at one value (nearest)
     boundaries: StrictStr | None = None  # a flag variable whose boundaries are refined, drawn
+    overlay: StrictStr | None = None  # a numeric output drawn as contour lines on top
 
     def at_values(self) -> dict[str, tuple[float, str]]:
         return {name: (value, "") for name, value in self.at.items()}
@@ -232,8 +233,10 @@ def validate(raw: dict) -> Sweep:
     method, record = _method(model, mech)
     given = _given(model, axes, method)
     _where_used(mech, given, method)
-    _mechanism_rules(mech, given)
     outputs = _outputs(model, mech, axes, record)
+    given["outputs"] = set(outputs)
+    _mechanism_rules(mech, given)
+    record = record._replace(outputs=tuple(outputs))
     _chart(model, mech, axes, outputs)
     fixed_echo, method = _in_use(mech, given, fixed_echo, method)
     spec = {
@@ -448,12 +451,13 @@ def _outputs(model: SpecModel, mech: Mechanism, axes: list[Axis], record) -> lis
     profiles when the method asks for them), without outputs that only echo a grid axis
     (the axis's coordinate carries them)."""
     scalars = [o.name for o in mech.outputs]
+    defaults = list(mech.default_outputs)
     profiles = [o.name for o in mech.profiles]
     profiling = bool(profiles) and len(mech.profile_coordinate(record)) > 0
     on_grid = {axis.name for axis in axes}
     echoes = {o.name for o in mech.outputs if o.echoes in on_grid}
     if model.outputs is None:
-        wanted = scalars + (profiles if profiling else [])
+        wanted = defaults + (profiles if profiling else [])
     else:
         if not model.outputs:
             raise UserError("outputs: empty list; omit the key for all outputs")
@@ -492,6 +496,11 @@ def _chart(model: SpecModel, mech: Mechanism, axes: list[Axis], outputs: list[st
     if model.chart.boundaries is not None and model.chart.boundaries not in flags:
         raise UserError(f"chart.boundaries: {model.chart.boundaries!r} is not a flag variable "
                         "of this sweep; allowed: " + ", ".join(flags))
+    numeric = [name for name in outputs if not mech.output(name).is_flag
+               and name not in {p.name for p in mech.profiles}]
+    if model.chart.overlay is not None and model.chart.overlay not in numeric:
+        raise UserError(f"chart.overlay: {model.chart.overlay!r} is not a numeric output of "
+                        "this sweep; allowed: " + ", ".join(numeric))
     if model.chart.color in {p.name for p in mech.profiles}:
         raise UserError(f"chart.color: {model.chart.color!r} is a profile; pick an output "
                         "with one value per design")

@@ -8,9 +8,11 @@ jitted function around one of them, built (and compiled) on first use.
 
 from functools import cache
 
+import numpy as np
 from numba import njit
 
 from kernels.impact.impact_map import SPEED_EPS, make_impact_map
+from kernels.impact.tangent import DPSI, DW, make_tracker
 from kernels.impact.outcomes import FLIGHT_EVENT, Settings
 from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_RK4, make_stepper
 from kernels.pendulum import models, tools
@@ -117,5 +119,173 @@ def zeno(model: str, tool: str):
     @njit
     def probe(t, y, data, p, r, s):
         return hit(t, y, data, p, r, s, False)
+
+    return probe
+
+
+@cache
+def section_jacobian(model: str, tool: str):
+    """The Jacobian of a steady cycle's section map two ways, through the same kernels:
+    probe(p, data, r, settings, transient, eps) -> (ok, period, carried, differenced), d x d
+    matrices over the section coordinates (the rotor speed unless constant, psi on the
+    blade, psi'): the tangent the driver carries through the cycle's ``period`` sections
+    (the first return of the section coordinates to 1e-8, at most 8) from the section
+    reached after ``transient`` sections, and central differences (step eps) of the same
+    sections from states moved along each coordinate (kept on the contact surface: on the
+    blade the rotor angle from the face, at constant speed the time with it)."""
+    c = contact(model, tool)
+    m = MODELS[model]
+    section = make_impact_map(c, False, True).section
+    start = make_tracker(c, 2 if m.driven else 4).start
+    first, compose, rotor_angle, rotor_speed = c.first, m.compose, m.rotor_angle, m.rotor_speed
+    psi_of, dpsi_of, driven = m.psi, m.dpsi, m.driven
+    blade = tool == "lab_window"
+
+    @njit
+    def run(t, y, data, p, r, s, period, tangent, d):
+        ok = True
+        for _ in range(period):
+            sec = section(t, y, data, p, r, s, False, tangent, d)
+            if sec.outcome != 0:
+                return False, t, y, data
+            ok = ok and sec.tangent_ok
+            t, y, data = sec.t, sec.y, sec.data
+        return ok, t, y, data
+
+    @njit
+    def coordinate(row, y):
+        return rotor_speed(y) if row == DW else psi_of(y) if row == DPSI else dpsi_of(y)
+
+    @njit
+    def probe(p, data, r, s, transient, eps):
+        t, y, data = first(p, data, 0)
+        none = np.empty((5, 0))
+        ok, t, y, data = run(t, y, data, p, r, s, transient, none, 0)
+        tangent = np.empty((5, 3))
+        d, rows = start(t, y, data, tangent)
+        period, t1, y1, data1 = 0, t, y, data
+        for q in range(1, 9):
+            good, t1, y1, data1 = run(t1, y1, data1, p, r, s, 1, none, 0)
+            back = good
+            for i in range(d):
+                a, b = coordinate(rows[i], y1), coordinate(rows[i], y)
+                back = back and abs(a - b) <= 1e-8 * max(1.0, abs(b))
+            if back:
+                period = q
+                break
+        if period == 0:
+            return False, 0, np.zeros((d, d)), np.zeros((d, d))
+        carried_ok, t1, y1, data1 = run(t, y, data, p, r, s, period, tangent, d)
+        carried = np.empty((d, d))
+        differenced = np.empty((d, d))
+        for i in range(d):
+            for j in range(d):
+                carried[i, j] = tangent[rows[i], j]
+        for j in range(d):
+            ends = np.empty((2, d))
+            for side in range(2):
+                delta = eps if side == 0 else -eps
+                w, psi, dpsi = rotor_speed(y), psi_of(y), dpsi_of(y)
+                if rows[j] == DW:
+                    w += delta
+                elif rows[j] == DPSI:
+                    psi += delta
+                else:
+                    dpsi += delta
+                phi, t2 = rotor_angle(t, y), t
+                if blade:
+                    phi = data[3] - tools.beta(psi, data[2])
+                    if driven:
+                        t2 = phi
+                t2, y2 = compose(t2, phi, w, psi, dpsi)
+                good, t3, y3, data3 = run(t2, y2, data, p, r, s, period, none, 0)
+                ok = ok and good
+                for i in range(d):
+                    ends[side, i] = coordinate(rows[i], y3)
+            for i in range(d):
+                differenced[i, j] = (ends[0, i] - ends[1, i]) / (2.0 * eps)
+        return ok and carried_ok, period, carried, differenced
+
+    return probe
+
+
+@cache
+def leading_multiplier():
+    """leading_multiplier(a, d) -> (|mu|, arg mu) of the tangent module."""
+    from kernels.impact.tangent import leading_multiplier as lead
+
+    @njit
+    def probe(a, d):
+        return lead(a, d)
+
+    return probe
+
+
+@cache
+def follow(model: str, tool: str):
+    """Follow one steady cycle along a parameter, through the driver's sections:
+    probe(p, data, rs, settings, transient, steps) -> rows (len(rs), 6) of (period, |mu|,
+    arg mu, edge distance, rotor angle per section, ok): from rest at rs[0] for
+    ``transient`` sections, then at each next restitution ``steps`` sections on from where
+    the last left off (so the same cycle is followed, as long as it exists and is
+    stable), its period (first return to 1e-9, <= 8), and the tangent through one
+    period. The blade's reach is data[1]: pass it in ``data``."""
+    from kernels.impact.tangent import leading_multiplier as lead
+
+    c = contact(model, tool)
+    m = MODELS[model]
+    section = make_impact_map(c, False, True).section
+    start = make_tracker(c, 2 if m.driven else 4).start
+    first, rotor_angle, rotor_speed, psi_of, dpsi_of = (c.first, m.rotor_angle,
+                                                        m.rotor_speed, m.psi, m.dpsi)
+
+    @njit
+    def probe(p, data, rs, s, transient, steps):
+        rows = np.full((rs.shape[0], 6), np.nan)
+        t, y, data = first(p, data, 0)
+        none = np.empty((5, 0))
+        for n in range(rs.shape[0]):
+            r = rs[n]
+            good = True
+            for _ in range(transient if n == 0 else steps):
+                sec = section(t, y, data, p, r, s, False, none, 0)
+                if sec.outcome != 0:
+                    good = False
+                    break
+                t, y, data = sec.t, sec.y, sec.data
+            if not good:
+                return rows
+            period = 0
+            t1, y1, data1 = t, y, data
+            for q in range(1, 9):
+                sec = section(t1, y1, data1, p, r, s, False, none, 0)
+                t1, y1, data1 = sec.t, sec.y, sec.data
+                back = True
+                for a, b in ((rotor_speed(y1), rotor_speed(y)), (psi_of(y1), psi_of(y)),
+                             (dpsi_of(y1), dpsi_of(y))):
+                    back = back and abs(a - b) <= 1e-9 * max(1.0, abs(b))
+                if back:
+                    period = q
+                    break
+            if period == 0:
+                rows[n, 0] = 0.0
+                continue
+            tangent = np.empty((5, 3))
+            d, where = start(t, y, data, tangent)
+            edge, ok = np.inf, True
+            t1, y1, data1 = t, y, data
+            for _ in range(period):
+                sec = section(t1, y1, data1, p, r, s, False, tangent, d)
+                edge, ok = min(edge, sec.edge), ok and sec.tangent_ok
+                t1, y1, data1 = sec.t, sec.y, sec.data
+            a = np.empty((d, d))
+            for i in range(d):
+                for j in range(d):
+                    a[i, j] = tangent[where[i], j]
+            modulus, angle = lead(a, d)
+            rows[n, 0], rows[n, 1], rows[n, 2], rows[n, 3] = period, modulus, angle, edge
+            rows[n, 4] = (rotor_angle(t1, y1) - rotor_angle(t, y)) / period
+            rows[n, 5] = 1.0 if ok else 0.0
+        return rows
 
     return probe

@@ -16,6 +16,8 @@ through -pi). A contact that ends a chatter, or a plastic one, sticks to the sto
 (the slide returns at once, not released).
 """
 
+import math
+
 from numba import njit
 
 from kernels import INLINE_OPTIONS
@@ -33,7 +35,7 @@ def relative_stop(model):
     flight = stop_flight(model)  # the rotor stop's flight, at the stop's own angle
 
     @njit(**INLINE_OPTIONS)
-    def first(p, data):
+    def first(p, data, start):
         t, y = compose(0.0, 0.0, 1.0, data[0], 0.0)
         return t, y, data
 
@@ -83,6 +85,18 @@ def relative_stop(model):
     def same(data):
         return data
 
+    @njit(**INLINE_OPTIONS)
+    def event_gradient(t, y, data):
+        return 0.0, 1.0, 0.0  # g = psi - psi_s
+
+    @njit(**INLINE_OPTIONS)
+    def no_slope(t, y, data):
+        return 0.0, 0.0
+
+    @njit(**INLINE_OPTIONS)
+    def no_edge(t, y, data):
+        return math.inf
+
     return Contact(model, flight, stick, first, key, from_key, jacobian, normal_speed,
                    normal_speed, normal_acceleration, gap_rate_after, pressed, settle, never,
-                   same, 1, 0.0, 1e3, False)
+                   same, 1, 0.0, 1e3, False, event_gradient, no_slope, False, no_edge)

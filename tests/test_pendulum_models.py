@@ -42,8 +42,8 @@ def section_log(sections, rtol=1e-11, atol=None, **design):
     case = np.array([[CODES[c].encode(given[c]) for c in CASE_COLUMNS]])
     rows, log = np.empty((1, N_ROW)), np.full((sections, 2), np.nan)
     block = SYSTEMS[(int(case[0, 0]), int(case[0, 5]))]
-    block(case, 1, rtol, rtol * 1e-2 if atol is None else atol, 0.002, sections - 1, rows,
-          log)
+    block(case, 1, rtol, rtol * 1e-2 if atol is None else atol, 0.002, sections - 1, 1,
+          rows, log)
     return log
 
 

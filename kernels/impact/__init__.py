@@ -53,8 +53,12 @@ System = namedtuple("System", ["rhs", "scales", "event_values", "event_rates", "
 #: accumulation point; a closed-form escape before a flight; the system data for the flight
 #: after a contact; which flight event is an escape; the shortest flight that opens a new
 #: section; the flights' horizon; and whether the section map is smooth (Aitken may
-#: extrapolate it)
+#: extrapolate it). For the tangent of the map (tangent.py): the gradient of the contact
+#: surface in (phi1, psi, psi') at a contact, d/dpsi of the contact Jacobian, whether a
+#: slide's exit is decided by the face alone; and the distance of a contact from the tool's
+#: edge (inf: the tool has none)
 Contact = namedtuple("Contact", [
     "model", "flight", "slide", "first", "key", "from_key", "jacobian", "normal_speed",
     "striker_speed", "normal_acceleration", "gap_rate_after", "pressed", "settle",
-    "escapes_before", "flight_data", "escape_event", "min_flight", "horizon", "smooth"])
+    "escapes_before", "flight_data", "escape_event", "min_flight", "horizon", "smooth",
+    "event_gradient", "jacobian_slope", "slide_exit_fixed", "edge_distance"])

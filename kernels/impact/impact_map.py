@@ -23,7 +23,12 @@ max_impacts, tol, log) -> Steady`` runs a sequence:
 5. the steady cycle is run once more with ``refine`` (turning points and peaks polished),
    which gives the outputs;
 6. the budget ``max_impacts``: without a cycle, not periodic where the map has stopped
-   contracting, else max_steps.
+   contracting, else max_steps;
+7. with ``stability``, the refined run of the cycle also carries the tangent of the section
+   map (tangent.py) for its leading multiplier, and every cycle reports its margins: the
+   slowest and fastest impact, and the smallest distance of an impact from the tool's edge;
+8. ``start`` picks the starting state (0: at rest, the tool's ``first``; others for the
+   attractor count).
 """
 
 import math
@@ -33,6 +38,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS, INNER_OPTIONS
+from kernels.impact.tangent import MAX_SECTION_DIMENSION, NO_TRACKER, make_tracker
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_NONFINITE,
                                      FLIGHT_UNDERFLOW, NO_COST, SEQUENCE_CYCLE,
                                      SEQUENCE_DEGENERATE, SEQUENCE_ESCAPE, SEQUENCE_MAX_STEPS,
@@ -41,40 +47,84 @@ from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_NONFIN
 
 SPEED_EPS = 1e-7  # a bounce slower than this ends a chatter sequence (H6)
 MAX_PERIOD = 8
+PERIOD_SEPARATION = 1000.0  # see classify_period
 MAX_CONTACTS_PER_SECTION = 200  # a chatter sequence longer than this is not a cycle
 
 #: what a sequence returns: its outcome (outcomes.SEQUENCE_*), the cycle's period and
 #: whether it accumulates a chatter, and over the cycle the amplitude, the free-flight time,
 #: the rotor angle and time elapsed, the summed striker speed at its section contacts and
-#: the peak acceleration; the sections before the cycle; the cost of the whole sequence
+#: the peak acceleration; the sections before the cycle; the cost of the whole sequence;
+#: the cycle's margins (``Margins``); the section state (key) of its cycle that has the
+#: smallest first component (the same for every phase of a period-n cycle)
 Steady = namedtuple("Steady", ["outcome", "period", "chatter", "amplitude", "flight_time",
-                               "rotor_angle", "elapsed", "speed", "peak", "impacts", "cost"])
+                               "rotor_angle", "elapsed", "speed", "peak", "impacts", "cost",
+                               "margins", "key"])
+#: how far a steady cycle is from changing: the slowest and fastest striker speed of its
+#: impacts, the smallest distance of an impact from the tool's edge, and the section map's
+#: leading multiplier (modulus, argument; NaN unless the tangent was carried)
+Margins = namedtuple("Margins", ["speed_min", "speed_max", "edge", "modulus", "angle"])
+NO_MARGINS = Margins(math.nan, math.nan, math.nan, math.nan, math.nan)
 #: the driver's functions: the whole sequence, one section, one contact, Newton's law
 Driver = namedtuple("Driver", ["steady", "section", "contact", "restitute"])
 #: what a section returns: its outcome (SEQUENCE_CYCLE: it reached the next section), the
-#: state there, whether it chattered, its amplitude, peak, free-flight time and cost
+#: state there, whether it chattered, its amplitude, peak, free-flight time and cost, the
+#: slowest and fastest striker speed at its contacts, their smallest distance from the
+#: tool's edge, and whether the tangent went through it
 Section = namedtuple("Section", ["outcome", "t", "y", "data", "chatter", "amplitude", "peak",
-                                 "flight_time", "cost"])
+                                 "flight_time", "cost", "speed_min", "speed_max", "edge",
+                                 "tangent_ok"])
 
 
 @njit(**KERNEL_OPTIONS)
 def classify_period(history, count, tol, max_period):
     """Smallest p <= max_period such that the last cycle of p states of an impact map
-    repeats the cycle before it (within tol, relative); 0 if none. history rows 0..count-1
-    are the states at successive sections."""
+    repeats the cycle before it (within tol, relative); 0 if none (yet). history rows
+    0..count-1 are the states at successive sections.
+
+    A p > 1 counts only when its p states lie apart by more than PERIOD_SEPARATION times
+    the repeat's residual and tol: a period-1 transient whose multiplier mu is near -1
+    alternates, and its two-step residual is |1 + mu| times its one-step difference, so it
+    would pass as period 2 long before it converges (a period-1 design with mu = -0.94 was
+    reported as period_n with the two-fold map's mu^2); and where the map's rounding
+    exceeds tol, a period-2 cycle failed its own repeat and passed as period 4 (with mu^2).
+    A genuine p-cycle's residual keeps falling while its states stay apart: it is
+    classified a little later."""
     last = count - 1
     for p in range(1, max_period + 1):
         if last - 2 * p < 0:
             return 0
-        same = True
+        residual = 0.0
         for q in range(p):
             a, b = last - q, last - q - p
             for i in range(history.shape[1]):
-                if abs(history[a, i] - history[b, i]) > tol * max(1.0, abs(history[a, i])):
-                    same = False
-        if same:
+                residual = max(residual, abs(history[a, i] - history[b, i])
+                               / max(1.0, abs(history[a, i])))
+        if residual > tol:
+            continue
+        spread = math.inf  # the closest two states of the p-cycle
+        for j in range(1, p):
+            apart = 0.0
+            for i in range(history.shape[1]):
+                apart = max(apart, abs(history[last, i] - history[last - j, i])
+                            / max(1.0, abs(history[last, i])))
+            spread = min(spread, apart)
+        if spread > PERIOD_SEPARATION * max(residual, tol):
             return p
+        return 0  # a lower period still converging: go on iterating
     return 0
+
+
+@njit(**KERNEL_OPTIONS)
+def radical_inverse(j, base):
+    """The j-th point of van der Corput's sequence in ``base``, in [0, 1): starting states
+    that fill their range evenly whatever their number, the same at every N (Halton's
+    sequence over bases 2, 3, 5)."""
+    x, scale = 0.0, 1.0 / base
+    while j > 0:
+        x += (j % base) * scale
+        j //= base
+        scale /= base
+    return x
 
 
 @njit(**KERNEL_OPTIONS)
@@ -87,9 +137,13 @@ def aitken(x0, x1, x2):
     return x2 - d2 * d2 / (d2 - d1)
 
 
-def make_impact_map(c, jump_early):
-    """The driver of a Contact (see the module docstring)."""
+def make_impact_map(c, jump_early, stability=False):
+    """The driver of a Contact (see the module docstring); with ``stability`` the steady
+    cycle also carries the tangent of the section map (tangent.py) for its multipliers."""
     model = c.model
+    tracker = make_tracker(c, 2 if model.driven else 4) if stability else NO_TRACKER
+    track_start, track_flight, track_law, track_multiplier = tracker
+    edge_distance = c.edge_distance
     flight, slide = c.flight, c.slide
     first, key_of, from_key, jacobian = c.first, c.key, c.from_key, c.jacobian
     normal_speed, striker_speed, normal_acceleration = (c.normal_speed, c.striker_speed,
@@ -114,7 +168,7 @@ def make_impact_map(c, jump_early):
 
     @njit(**INNER_OPTIONS)
     def contact(t, y, data, p, r, settings, refine):
-        """A contact: (opens, t, y, data, chatter, amplitude, peak, cost)."""
+        """A contact: (opens, t, y, data, slid, chatter, amplitude, peak, cost)."""
         approach = normal_speed(t, y, data, p)
         # the chatter accumulates once the bounce it would start falls below SPEED_EPS:
         # its flight would be shorter than the resolution of the event search
@@ -129,27 +183,37 @@ def make_impact_map(c, jump_early):
         if (r == 0.0 or zeno) and pressed(t, y, data, p):
             released, t, y, data, amplitude, peak, cost = slide(t, y, data, p, settings,
                                                                 refine)
-            return True, t, y, data, zeno, amplitude, peak, cost
-        return gap_rate_after(t, y, data, p) < 0.0, t, y, data, zeno, 0.0, 0.0, NO_COST
+            return True, t, y, data, True, zeno, amplitude, peak, cost
+        return (gap_rate_after(t, y, data, p) < 0.0, t, y, data, False, zeno, 0.0, 0.0,
+                NO_COST)
 
     @njit(**INNER_OPTIONS)
-    def section(t, y, data, p, r, settings, refine):
-        """From a section contact (before its law) to the next section contact."""
+    def section(t, y, data, p, r, settings, refine, tangent, d):
+        """From a section contact (before its law) to the next section contact; the first
+        d columns of ``tangent`` are carried along (tangent.py)."""
         chatter = False
         amplitude = peak = flight_time = 0.0
+        speed_min, speed_max, edge = math.inf, 0.0, math.inf
+        tangent_ok = True
         cost = NO_COST
         for _ in range(MAX_CONTACTS_PER_SECTION):
-            opens, t, y, data, zeno, a, pk, spent = contact(t, y, data, p, r, settings,
-                                                            refine)
+            speed = striker_speed(t, y, data, p)
+            speed_min, speed_max = min(speed_min, speed), max(speed_max, speed)
+            edge = min(edge, edge_distance(t, y, data))
+            t0, y0, data0 = t, y, data
+            opens, t, y, data, slid, zeno, a, pk, spent = contact(t, y, data, p, r,
+                                                                  settings, refine)
+            tangent_ok = tangent_ok and track_law(tangent, d, t0, y0, data0, p, r, slid,
+                                                  zeno)
             cost = add(cost, spent)
             chatter = chatter or zeno
             amplitude, peak = max(amplitude, a), max(peak, pk)
             if not opens:
                 return Section(SEQUENCE_DEGENERATE, t, y, data, chatter, amplitude, peak,
-                               flight_time, cost)
+                               flight_time, cost, speed_min, speed_max, edge, tangent_ok)
             if escapes_before(t, y, data, p):  # decided in closed form (H1, H2, H12)
                 return Section(SEQUENCE_ESCAPE, t, y, data, chatter, amplitude, peak,
-                               flight_time, cost)
+                               flight_time, cost, speed_min, speed_max, edge, tangent_ok)
             fl = flight(t, y, p, flight_data(data), settings, refine)
             cost = add(cost, fl.cost)
             amplitude, peak = max(amplitude, fl.amplitude), max(peak, fl.peak)
@@ -160,47 +224,65 @@ def make_impact_map(c, jump_early):
                            SEQUENCE_NONFINITE if fl.outcome == FLIGHT_NONFINITE else
                            SEQUENCE_MAX_STEPS)
                 return Section(outcome, fl.t, fl.y, fl.data, chatter, amplitude, peak,
-                               flight_time, cost)
+                               flight_time, cost, speed_min, speed_max, edge, tangent_ok)
+            tangent_ok = tangent_ok and track_flight(tangent, d, t, y, fl.t, fl.y, fl.f,
+                                                     fl.data, p, settings)
             duration = fl.t - t
             flight_time += duration
             t, y, data = fl.t, fl.y, fl.data
             if duration >= min_flight:
                 return Section(SEQUENCE_CYCLE, t, y, data, chatter, amplitude, peak,
-                               flight_time, cost)
+                               flight_time, cost, speed_min, speed_max, edge, tangent_ok)
         return Section(SEQUENCE_NOT_PERIODIC, t, y, data, chatter, amplitude, peak,
-                       flight_time, cost)
+                       flight_time, cost, speed_min, speed_max, edge, tangent_ok)
 
     @njit(**INNER_OPTIONS)
     def cycle(t, y, data, p, r, settings, period):
         """The steady cycle with refined flights: (outcome, chatter, amplitude, flight time,
-        rotor angle, elapsed, speed, peak, residual, cost, end state)."""
+        rotor angle, elapsed, speed, peak, residual, cost, margins, canonical key)."""
         t0, phi0, key0 = t, rotor_angle(t, y), key_of(t, y, data, p)
         chatter = False
         amplitude = peak = flight_time = speed = 0.0
+        speed_min, speed_max, edge = math.inf, 0.0, math.inf
         cost = NO_COST
+        tangent = np.empty((5, MAX_SECTION_DIMENSION))
+        d, rows = track_start(t, y, data, tangent)
+        tangent_ok = True
+        canonical = key0
         for _ in range(period):
+            here = key_of(t, y, data, p)
+            if here[0] < canonical[0]:
+                canonical = here
             speed += striker_speed(t, y, data, p)
-            s = section(t, y, data, p, r, settings, bool(True))  # not a literal: see steady
+            s = section(t, y, data, p, r, settings, bool(True), tangent, d)  # see steady
             cost = add(cost, s.cost)
             chatter = chatter or s.chatter
             amplitude, peak = max(amplitude, s.amplitude), max(peak, s.peak)
             flight_time += s.flight_time
+            speed_min, speed_max = min(speed_min, s.speed_min), max(speed_max, s.speed_max)
+            edge, tangent_ok = min(edge, s.edge), tangent_ok and s.tangent_ok
             t, y, data = s.t, s.y, s.data
             if s.outcome != SEQUENCE_CYCLE:
                 return (s.outcome, chatter, amplitude, flight_time, 0.0, 0.0, speed, peak,
-                        math.inf, cost)
+                        math.inf, cost, NO_MARGINS, canonical)
         key = key_of(t, y, data, p)
         residual = 0.0
         for i in range(len(key)):
             residual = max(residual, abs(key[i] - key0[i]))
+        modulus = angle = math.nan
+        if tangent_ok:
+            modulus, angle = track_multiplier(tangent, d, rows)
         return (SEQUENCE_CYCLE, chatter, amplitude, flight_time, rotor_angle(t, y) - phi0,
-                t - t0, speed, peak, residual, cost)
+                t - t0, speed, peak, residual, cost,
+                Margins(speed_min, speed_max, edge, modulus, angle), canonical)
 
     @njit(**INNER_OPTIONS)
-    def steady(p, data0, r, settings, max_impacts, tol, log):
-        """The sequence from its start to its steady cycle; log[j] gets (rotor angle mod
-        2 pi, psi) at section j (the last row takes any beyond)."""
-        t, y, data = first(p, data0)
+    def steady(p, data0, r, settings, max_impacts, tol, log, start):
+        """The sequence from starting state number ``start`` (0: at rest, the tool's
+        ``first``) to its steady cycle; log[j] gets (rotor angle mod 2 pi, psi) at section
+        j (the last row takes any beyond)."""
+        t, y, data = first(p, data0, start)
+        no_tangent = np.empty((5, 0))  # the transient's sections carry no tangent
         key = key_of(t, y, data, p)
         history = np.empty((max_impacts + 2, len(key)))
         count = 0
@@ -208,7 +290,7 @@ def make_impact_map(c, jump_early):
         cost = NO_COST
         jumped = False
         speculative = Steady(SEQUENCE_MAX_STEPS, 0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0,
-                             NO_COST)
+                             NO_COST, NO_MARGINS, key)
         while count <= max_impacts:
             key = key_of(t, y, data, p)
             for i in range(len(key)):
@@ -235,20 +317,24 @@ def make_impact_map(c, jump_early):
                 refine = jumped = True
             speed = striker_speed(t, y, data, p)
             t_start, phi_start = t, rotor_angle(t, y)
-            s = section(t, y, data, p, r, settings, refine)
+            s = section(t, y, data, p, r, settings, refine, no_tangent, 0)
             cost = add(cost, s.cost)
             if s.outcome != SEQUENCE_CYCLE:
                 return Steady(s.outcome, 0, s.chatter, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, count,
-                              cost)
+                              cost, NO_MARGINS, key)
             t, y, data = s.t, s.y, s.data
             if refine:
+                # one impact a cycle on a smooth map: no edge, the multiplier in closed form
                 speculative = Steady(SEQUENCE_CYCLE, 1, s.chatter, s.amplitude,
                                      s.flight_time, rotor_angle(t, y) - phi_start,
-                                     t - t_start, speed, s.peak, 0, NO_COST)
+                                     t - t_start, speed, s.peak, 0, NO_COST,
+                                     Margins(speed, speed, math.inf, math.nan, math.nan),
+                                     key_of(t, y, data, p))
             if constant:
                 return Steady(SEQUENCE_CYCLE, 1, s.chatter, s.amplitude, s.flight_time,
                               speculative.rotor_angle, speculative.elapsed,
-                              striker_speed(t, y, data, p), s.peak, 1, cost)
+                              striker_speed(t, y, data, p), s.peak, 1, cost,
+                              speculative.margins, speculative.key)
         impacts = count - 2 * period
         if period == 0:
             recent = older = 0.0
@@ -257,12 +343,13 @@ def make_impact_map(c, jump_early):
                 older = max(older, abs(history[count // 2, i] - history[count // 2 - 1, i]))
             outcome = (SEQUENCE_NOT_PERIODIC if count >= 20 and recent > 0.1 * older else
                        SEQUENCE_MAX_STEPS)
-            return Steady(outcome, 0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, max_impacts, cost)
+            return Steady(outcome, 0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, max_impacts, cost,
+                          NO_MARGINS, key)
         if jumped and period == 1 and speculative.outcome == SEQUENCE_CYCLE:
             return Steady(SEQUENCE_CYCLE, 1, speculative.chatter, speculative.amplitude,
                           speculative.flight_time, speculative.rotor_angle,
                           speculative.elapsed, speculative.speed, speculative.peak, impacts,
-                          cost)
+                          cost, speculative.margins, speculative.key)
         # the steady cycle from where the sequence is (on the cycle, to tol); at period 1 on
         # a smooth map from Aitken's extrapolation of the last three sections instead, kept
         # if the cycle's residual beats the last iteration's step (H13)
@@ -283,8 +370,8 @@ def make_impact_map(c, jump_early):
         outcome, chatter, amplitude, flight_time, angle, elapsed, speed, peak = result[:8]
         if outcome != SEQUENCE_CYCLE:  # the cycle did not repeat after all
             return Steady(SEQUENCE_MAX_STEPS, 0, chatter, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                          impacts, cost)
+                          impacts, cost, NO_MARGINS, key)
         return Steady(SEQUENCE_CYCLE, period, chatter, amplitude, flight_time, angle, elapsed,
-                      speed, peak, impacts, cost)
+                      speed, peak, impacts, cost, result[10], result[11])
 
     return Driver(steady, section, contact, restitute)

@@ -11,9 +11,13 @@ C = namedtuple("CaseColumns", CASE_COLUMNS)(*range(len(CASE_COLUMNS)))
 #: cycle's period and whether it chatters, amplitude [rad], frequency ratio n, impact
 #: interval [rotor rad], striker normal speed at impact [omega1 l_contact], impacts to
 #: converge, peak |psi''| [omega1^2], R_crit, steps, rejected steps, events, mean rotor speed
-#: [omega1], method used, estimated relative error of the cycle's values (auto)
+#: [omega1], method used, estimated relative error of the cycle's values (auto); on
+#: request, the cycle's margins: slowest over fastest impact speed, distance of an impact
+#: from the blade's edge [rad], the leading multiplier's modulus and argument [rad], and
+#: over several starts the distinct attractors and the share reaching the one from rest
 ROW_SLOTS = ("outcome", "period", "chatter", "amplitude", "frequency", "interval", "speed",
              "impacts", "acceleration", "restitution_critical", "steps", "rejected", "events",
-             "rotor_speed", "method", "error")
+             "rotor_speed", "method", "error", "speed_ratio", "edge", "modulus", "angle",
+             "attractors", "basin")
 ROW = namedtuple("RowSlots", ROW_SLOTS)(*range(len(ROW_SLOTS)))
 N_ROW = len(ROW_SLOTS)

@@ -23,7 +23,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import KERNEL_OPTIONS, INLINE_OPTIONS
+from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
 from kernels.extrema import peak_search
 from kernels.impact.tuples import relative_scales
 
@@ -32,7 +32,8 @@ MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR = 0, 1, 2
 #: the functions of a model (see the module docstring)
 Model = namedtuple("Model", [
     "rhs", "scales", "monitor", "accelerations", "response", "rotor_angle", "rotor_speed",
-    "psi", "dpsi", "compose", "critical_speed", "shift", "driven"])
+    "psi", "dpsi", "compose", "critical_speed", "shift", "driven", "jacobian",
+    "response_slope", "tangent_state", "tangent_coordinates"])
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(96)  # for the half-period quadrature
 
@@ -55,6 +56,43 @@ def paper_rhs(y, p):
 def rigid_rhs(y, p):
     k, kappa = p
     return (y[1], -kappa * k * math.sin(y[0]))
+
+
+@njit(**INLINE_OPTIONS)
+def paper_jacobian(y, p):
+    """d(rhs)/dy of the paper's equation, row-major: a' = k dX/dpsi/(1 + xi X)^2."""
+    psi, dpsi = y
+    k, xi = p
+    s, c = math.sin(psi), math.cos(psi)
+    x = k * k + 1.0 + 2.0 * k * c
+    a = k * x / (1.0 + xi * x)
+    da = k * (-2.0 * k * s) / ((1.0 + xi * x) * (1.0 + xi * x))
+    return (0.0, 1.0, -(dpsi * dpsi + xi) * (da * s + a * c), -2.0 * a * dpsi * s)
+
+
+@njit(**INLINE_OPTIONS)
+def rigid_jacobian(y, p):
+    k, kappa = p
+    return (0.0, 1.0, -kappa * k * math.cos(y[0]), 0.0)
+
+
+@njit(**INLINE_OPTIONS)
+def driven_tangent_state(c):
+    """A perturbation in coordinates (dt, dphi1, dphi1', dpsi, dpsi') as the model's state
+    perturbation (dpsi, dpsi'); the rotor angle is the time."""
+    return (c[3], c[4])
+
+
+@njit(**INLINE_OPTIONS)
+def driven_tangent_coordinates(dt, dy):
+    """The coordinates of a perturbation dt of the time and dy of the state: the rotor
+    angle moves with the time, its speed not at all."""
+    return (dt, dt, 0.0, dy[0], dy[1])
+
+
+@njit(**INLINE_OPTIONS)
+def driven_response_slope(y, j_phi, j_psi, dj_phi, dj_psi, p):
+    return 0.0, 0.0
 
 
 @njit(**INLINE_OPTIONS)
@@ -100,14 +138,15 @@ def driven_response(y, j_phi, j_psi, p):
     return 0.0, 1.0
 
 
-def driven_model(rhs, critical_speed):
+def driven_model(rhs, critical_speed, jacobian):
     @njit(**INLINE_OPTIONS)
     def accelerations(t, y, p):
         return 0.0, rhs(y, p)[1]
 
     return Model(rhs, relative_scales, driven_monitor, accelerations, driven_response,
                  driven_rotor_angle, driven_rotor_speed, driven_psi, driven_dpsi,
-                 driven_compose, critical_speed, driven_shift, True)
+                 driven_compose, critical_speed, driven_shift, True, jacobian,
+                 driven_response_slope, driven_tangent_state, driven_tangent_coordinates)
 
 
 # ---------------------------------------------------------------- rotor of finite inertia
@@ -128,6 +167,56 @@ def rotor_accelerations(w, psi, dpsi, k, xi, j1, slope, idle):
     rhs2 = -s * w * w
     det = m11 * m22 - m12 * m12
     return (m22 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det
+
+
+@njit(**KERNEL_OPTIONS)
+def _solve(m11, m12, m22, z1, z2):
+    """M^-1 z for the symmetric 2x2 mass matrix."""
+    det = m11 * m22 - m12 * m12
+    return (m22 * z1 - m12 * z2) / det, (m11 * z2 - m12 * z1) / det
+
+
+@njit(**INNER_OPTIONS)
+def rotor_jacobian(y, p):
+    """d(rhs)/dy of the rotor model, row-major over (phi1, phi1', psi, psi'): the
+    accelerations a = M^-1 b differentiate as M^-1 (db - dM a)."""
+    k, xi, j1, slope, idle = p
+    w, psi, v = y[1], y[2], y[3]
+    m11, m12, m22 = mass_matrix(psi, k, xi, j1)
+    a1, b2 = rotor_accelerations(w, psi, v, k, xi, j1, slope, idle)
+    sn, cs = math.sin(psi), math.cos(psi)
+    s, ds = xi * k * sn, xi * k * cs
+    dm11, dm12 = -2.0 * xi * k * sn, -xi * k * sn  # dM/dpsi (M22 is constant)
+    aw = _solve(m11, m12, m22, -slope + 2.0 * s * v, -2.0 * s * w)
+    av = _solve(m11, m12, m22, s * (2.0 * w + 2.0 * v), 0.0)
+    ap = _solve(m11, m12, m22, ds * (2.0 * w * v + v * v) - dm11 * a1 - dm12 * b2,
+                -ds * w * w - dm12 * a1)
+    return (0.0, 1.0, 0.0, 0.0,
+            0.0, aw[0], ap[0], av[0],
+            0.0, 0.0, 0.0, 1.0,
+            0.0, aw[1], ap[1], av[1])
+
+
+@njit(**INNER_OPTIONS)
+def rotor_response_slope(y, j_phi, j_psi, dj_phi, dj_psi, p):
+    """d/dpsi of M^-1 J^T: M^-1 (dJ^T - dM M^-1 J^T)."""
+    k, xi, j1, slope, idle = p
+    m11, m12, m22 = mass_matrix(y[2], k, xi, j1)
+    x_phi, x_psi = _solve(m11, m12, m22, j_phi, j_psi)
+    sn = math.sin(y[2])
+    dm11, dm12 = -2.0 * xi * k * sn, -xi * k * sn
+    return _solve(m11, m12, m22, dj_phi - dm11 * x_phi - dm12 * x_psi,
+                  dj_psi - dm12 * x_phi)
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_tangent_state(c):
+    return (c[1], c[2], c[3], c[4])
+
+
+@njit(**INLINE_OPTIONS)
+def rotor_tangent_coordinates(dt, dy):
+    return (dt, dy[0], dy[1], dy[2], dy[3])
 
 
 @njit(**INLINE_OPTIONS)
@@ -205,7 +294,8 @@ def no_critical_speed(p):
 
 ROTOR = Model(rotor_rhs, rotor_scales, rotor_monitor, rotor_model_accelerations,
               rotor_response, rotor_rotor_angle, rotor_rotor_speed, rotor_psi, rotor_dpsi,
-              rotor_compose, no_critical_speed, rotor_shift, False)
+              rotor_compose, no_critical_speed, rotor_shift, False, rotor_jacobian,
+              rotor_response_slope, rotor_tangent_state, rotor_tangent_coordinates)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -352,8 +442,8 @@ def rigid_critical(p):
     return 2.0 * math.sqrt(p[0] * p[1])
 
 
-PAPER = driven_model(paper_rhs, paper_critical)
-RIGID = driven_model(rigid_rhs, rigid_critical)
+PAPER = driven_model(paper_rhs, paper_critical, paper_jacobian)
+RIGID = driven_model(rigid_rhs, rigid_critical, rigid_jacobian)
 
 
 @njit(**KERNEL_OPTIONS)

@@ -8,11 +8,12 @@ the rotor model on the blade.
 
 import math
 
+import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS, INNER_OPTIONS
 from kernels.impact.impact_map import make_impact_map
-from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings
+from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings, add
 from kernels.impact.runge_kutta import METHOD_DOPRI5
 from kernels.pendulum import models, tools
 from kernels.pendulum.cases import C, ROW
@@ -48,16 +49,24 @@ def blade_data(case):
     return (-tools.TWO_PI, case[C.tool_window], case[C.k], 0.0, 1.0)
 
 
-def make_block(contact, jump_early, parameters, data_of, frequency):
+#: two starting states reach the same attractor when their cycles' outcome, period and
+#: chatter agree and their section states agree to this (relative)
+ATTRACTOR_TOL = 1e-6
+
+
+def make_block(contact, jump_early, parameters, data_of, frequency, stability=False):
     """The block function of a system: each case's steady state into its row (ROW), and
     into ``log`` the section impacts (rotor angle mod 2 pi, psi) of the last case.
     ``frequency``: whether flights end where they started (the rotor stop), so that pi over
-    the flight time is the free oscillation's frequency coefficient."""
-    steady = make_impact_map(contact, jump_early).steady
+    the flight time is the free oscillation's frequency coefficient. ``stability``: carry
+    the tangent through the steady cycle for its multipliers. With ``starts`` > 1 each case
+    is also run from starts - 1 more starting states (the tool's ``first``), and the
+    distinct attractors they reach are counted."""
+    steady = make_impact_map(contact, jump_early, stability).steady
     horizon = contact.horizon
 
     @njit(**INNER_OPTIONS)
-    def block(cases, method, rtol, atol, dt, max_impacts, rows, log):
+    def block(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
         settings = Settings(method, rtol, atol, dt, 10 ** 6, horizon)
         # section states repeat to 10 rtol (DOPRI5), or to 1e-9 at RK4's fixed step
         tol = max(10.0 * rtol, 1e-12) if method == METHOD_DOPRI5 else 1e-9
@@ -66,12 +75,39 @@ def make_block(contact, jump_early, parameters, data_of, frequency):
             row = rows[c]
             for j in range(row.shape[0]):
                 row[j] = math.nan
-            s = steady(parameters(case), data_of(case), case[C.R], settings, max_impacts, tol,
-                       log)
+            p, data, r = parameters(case), data_of(case), case[C.R]
+            s = steady(p, data, r, settings, max_impacts, tol, log, 0)
             row[ROW.outcome] = s.outcome
-            row[ROW.steps] = s.cost.steps + s.cost.rejected
-            row[ROW.rejected] = s.cost.rejected
-            row[ROW.events] = s.cost.events
+            cost = s.cost
+            if starts > 1:
+                n_keys = len(s.key)
+                seen = np.empty((starts, 3 + n_keys))
+                seen[0, 0], seen[0, 1], seen[0, 2] = s.outcome, s.period, 1.0 if s.chatter else 0.0
+                for i in range(n_keys):
+                    seen[0, 3 + i] = s.key[i]
+                distinct, same = 1, 1
+                for j in range(1, starts):
+                    other = steady(p, data, r, settings, max_impacts, tol, log, j)
+                    cost = add(cost, other.cost)
+                    seen[distinct, 0], seen[distinct, 1] = other.outcome, other.period
+                    seen[distinct, 2] = 1.0 if other.chatter else 0.0
+                    for i in range(n_keys):
+                        seen[distinct, 3 + i] = other.key[i]
+                    if _same_attractor(seen, 0, distinct, n_keys):
+                        same += 1
+                    new = True
+                    for i in range(distinct):
+                        if _same_attractor(seen, i, distinct, n_keys):
+                            new = False
+                            break
+                    if new:
+                        distinct += 1
+                row[ROW.attractors], row[ROW.basin] = distinct, same / starts
+            else:
+                row[ROW.attractors], row[ROW.basin] = 1.0, 1.0
+            row[ROW.steps] = cost.steps + cost.rejected
+            row[ROW.rejected] = cost.rejected
+            row[ROW.events] = cost.events
             row[ROW.impacts] = s.impacts
             if s.outcome != SEQUENCE_CYCLE:
                 continue
@@ -84,57 +120,117 @@ def make_block(contact, jump_early, parameters, data_of, frequency):
             row[ROW.speed] = s.speed / s.period
             row[ROW.acceleration] = s.peak
             row[ROW.rotor_speed] = s.rotor_angle / s.elapsed
+            m = s.margins
+            row[ROW.speed_ratio] = m.speed_min / m.speed_max
+            row[ROW.edge] = m.edge if math.isfinite(m.edge) else math.nan
+            row[ROW.modulus], row[ROW.angle] = m.modulus, m.angle
 
     return block
 
 
-_paper_stop = make_block(tools.rotor_stop(models.PAPER), True, paper_parameters, stop_data,
-                         True)
-_rigid_stop = make_block(tools.rotor_stop(models.RIGID), True, rigid_parameters, stop_data,
-                         True)
-_rotor_stop = make_block(tools.rotor_stop(models.ROTOR), False, rotor_parameters, stop_data,
-                         True)
-_paper_blade = make_block(tools.lab_window(models.PAPER), False, paper_parameters,
-                          blade_data, False)
-_rigid_blade = make_block(tools.lab_window(models.RIGID), False, rigid_parameters,
-                          blade_data, False)
-_rotor_blade = make_block(tools.lab_window(models.ROTOR), False, rotor_parameters,
-                          blade_data, False)
+@njit(**KERNEL_OPTIONS)
+def _same_attractor(seen, a, b, n_keys):
+    """Rows a and b of ``seen`` (outcome, period, chatter, section state): the same
+    attractor? A sequence that ends without a cycle (escape, no impact, ...) is one
+    attractor per outcome."""
+    for i in range(3):
+        if seen[a, i] != seen[b, i]:
+            return False
+    if seen[a, 0] != SEQUENCE_CYCLE:
+        return True
+    for i in range(3, 3 + n_keys):
+        if abs(seen[a, i] - seen[b, i]) > ATTRACTOR_TOL * max(1.0, abs(seen[a, i])):
+            return False
+    return True
+
+
+_ARGS = (tools.rotor_stop, tools.lab_window)
+_PARAMETERS = {models.MODEL_PAPER: paper_parameters, models.MODEL_RIGID: rigid_parameters,
+               models.MODEL_ROTOR: rotor_parameters}
+_MODELS = {models.MODEL_PAPER: models.PAPER, models.MODEL_RIGID: models.RIGID,
+           models.MODEL_ROTOR: models.ROTOR}
+
+
+def _block(model, tool, stability=False):
+    """The block function of a model on a tool (0: rotor stop, 1: lab window); only the
+    constant-speed models on the rotor stop have a smooth (affine) map to jump along."""
+    contact = _ARGS[tool](_MODELS[model])
+    return make_block(contact, tool == 0 and model != models.MODEL_ROTOR, _PARAMETERS[model],
+                      (stop_data, blade_data)[tool], tool == 0, stability)
+
+
+_paper_stop = _block(models.MODEL_PAPER, 0)
+_rigid_stop = _block(models.MODEL_RIGID, 0)
+_rotor_stop = _block(models.MODEL_ROTOR, 0)
+_paper_blade = _block(models.MODEL_PAPER, 1)
+_rigid_blade = _block(models.MODEL_RIGID, 1)
+_rotor_blade = _block(models.MODEL_ROTOR, 1)
+# with the tangent: the systems whose multipliers are not known in closed form (the affine
+# map of the constant-speed models on the rotor stop has the multiplier R)
+_rotor_stop_tangent = _block(models.MODEL_ROTOR, 0, True)
+_paper_blade_tangent = _block(models.MODEL_PAPER, 1, True)
+_rigid_blade_tangent = _block(models.MODEL_RIGID, 1, True)
+_rotor_blade_tangent = _block(models.MODEL_ROTOR, 1, True)
 
 
 # module-level entry points: numba caches these on disk (a closure called from Python is
 # recompiled in every process)
 @njit(**KERNEL_OPTIONS)
-def paper_on_stop(cases, method, rtol, atol, dt, max_impacts, rows, log):
-    _paper_stop(cases, method, rtol, atol, dt, max_impacts, rows, log)
+def paper_on_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _paper_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
 
 
 @njit(**KERNEL_OPTIONS)
-def rigid_on_stop(cases, method, rtol, atol, dt, max_impacts, rows, log):
-    _rigid_stop(cases, method, rtol, atol, dt, max_impacts, rows, log)
+def rigid_on_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _rigid_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
 
 
 @njit(**KERNEL_OPTIONS)
-def rotor_on_stop(cases, method, rtol, atol, dt, max_impacts, rows, log):
-    _rotor_stop(cases, method, rtol, atol, dt, max_impacts, rows, log)
+def rotor_on_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _rotor_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
 
 
 @njit(**KERNEL_OPTIONS)
-def paper_on_blade(cases, method, rtol, atol, dt, max_impacts, rows, log):
-    _paper_blade(cases, method, rtol, atol, dt, max_impacts, rows, log)
+def paper_on_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _paper_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
 
 
 @njit(**KERNEL_OPTIONS)
-def rigid_on_blade(cases, method, rtol, atol, dt, max_impacts, rows, log):
-    _rigid_blade(cases, method, rtol, atol, dt, max_impacts, rows, log)
+def rigid_on_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _rigid_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
 
 
 @njit(**KERNEL_OPTIONS)
-def rotor_on_blade(cases, method, rtol, atol, dt, max_impacts, rows, log):
-    _rotor_blade(cases, method, rtol, atol, dt, max_impacts, rows, log)
+def rotor_on_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _rotor_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
+
+
+@njit(**KERNEL_OPTIONS)
+def rotor_on_stop_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _rotor_stop_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
+
+
+@njit(**KERNEL_OPTIONS)
+def paper_on_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _paper_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
+
+
+@njit(**KERNEL_OPTIONS)
+def rigid_on_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _rigid_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
+
+
+@njit(**KERNEL_OPTIONS)
+def rotor_on_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
+    _rotor_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
 
 
 #: the block function of each (model, tool), by their codes
 SYSTEMS = {(models.MODEL_PAPER, 0): paper_on_stop, (models.MODEL_RIGID, 0): rigid_on_stop,
            (models.MODEL_ROTOR, 0): rotor_on_stop, (models.MODEL_PAPER, 1): paper_on_blade,
            (models.MODEL_RIGID, 1): rigid_on_blade, (models.MODEL_ROTOR, 1): rotor_on_blade}
+#: the same with the tangent, where the multipliers need it
+TANGENT_SYSTEMS = {(models.MODEL_ROTOR, 0): rotor_on_stop_tangent,
+                   (models.MODEL_PAPER, 1): paper_on_blade_tangent,
+                   (models.MODEL_RIGID, 1): rigid_on_blade_tangent,
+                   (models.MODEL_ROTOR, 1): rotor_on_blade_tangent}

@@ -33,6 +33,7 @@ from kernels.extrema import peak_search
 from kernels.impact import Contact, System
 from kernels.impact.events import make_illinois
 from kernels.impact.flight import Flight, make_flight
+from kernels.impact.impact_map import radical_inverse
 from kernels.impact.outcomes import FLIGHT_EVENT, NO_COST
 from kernels.impact.tuples import relative_scales
 
@@ -75,6 +76,16 @@ def _never(t, y, data, p):
     return False
 
 
+@njit(**INLINE_OPTIONS)
+def _no_slope(t, y, data):
+    return 0.0, 0.0  # a contact Jacobian that does not change with psi
+
+
+@njit(**INLINE_OPTIONS)
+def _no_edge(t, y, data):
+    return math.inf
+
+
 def stop_flight(model):
     """The free flight of a pendulum below a stop fixed on the rotor at psi = data[0]:
     events 0, the stop (psi rising through it), and 1, escape (psi falling through -pi)."""
@@ -110,9 +121,12 @@ def rotor_stop(model):
     flight = stop_flight(model)
 
     @njit(**INLINE_OPTIONS)
-    def first(p, data):
-        """At rest on the stop, the rotor at its starting speed: the first impact at once."""
-        t, y = compose(0.0, 0.0, p[-1], 0.0, 0.0)  # driven models ignore the speed
+    def first(p, data, start):
+        """Start 0: at rest on the stop, the rotor at its starting speed: the first impact
+        at once. Start j: arriving at the stop with psi' = 2 (1 + k) x_j (Halton point in
+        base 2; the steady arrival speed at R = 0 is 1 + k)."""
+        speed = 2.0 * (1.0 + data[1]) * radical_inverse(start, 2)
+        t, y = compose(0.0, 0.0, p[-1], 0.0, speed)  # driven models ignore the rotor speed
         return t, y, data
 
     @njit(**INLINE_OPTIONS)
@@ -160,9 +174,14 @@ def rotor_stop(model):
         over the top: decided in closed form, not by a horizon (H1, H2, H12)."""
         return -dpsi_of(y) >= critical_speed(p)
 
+    @njit(**INLINE_OPTIONS)
+    def event_gradient(t, y, data):
+        return 0.0, 1.0, 0.0  # g = psi - stop
+
     return Contact(model, flight, no_slide, first, key, from_key, jacobian, normal_speed,
                    normal_speed, normal_acceleration, gap_rate_after, _never, settle,
-                   escapes_before, flight_data, 1, 0.0, math.inf, True)
+                   escapes_before, flight_data, 1, 0.0, math.inf, True, event_gradient,
+                   _no_slope, True, _no_edge)
 
 
 SLIDE_SAMPLES = 128  # pressing samples along a kinematic slide (a release is bracketed)
@@ -387,11 +406,18 @@ def lab_window(model):
         slide = _constrained_slide(model)
 
     @njit(**INLINE_OPTIONS)
-    def first(p, data):
-        """At rest relative to the rotor on the blade's working face (met rising): the first
-        impact at once, as on the rotor stop."""
+    def first(p, data, start):
+        """Start 0: at rest relative to the rotor on the blade's working face (met rising):
+        the first impact at once, as on the rotor stop. Start j: on that face at psi =
+        window (2 x_j - 1), closing at G' = 2 x'_j phi1' (Halton points in bases 3 and 2)."""
         lower, window, k, level, side = data
-        t, y = compose(0.0, 0.0, p[-1], 0.0, 0.0)
+        w = rotor_speed(compose(0.0, 0.0, p[-1], 0.0, 0.0)[1])
+        psi, dpsi = 0.0, 0.0
+        if start > 0:
+            psi = window * (2.0 * radical_inverse(start, 3) - 1.0)
+            dpsi = (2.0 * radical_inverse(start, 2) - 1.0) * w / h_ratio(psi, k)
+        phi1 = 0.0 - beta(psi, k)  # 0.0, not -0.0, at rest
+        t, y = compose(phi1, phi1, w, psi, dpsi)
         return t, y, (lower, window, k, 0.0, 1.0)
 
     @njit(**INLINE_OPTIONS)
@@ -470,6 +496,21 @@ def lab_window(model):
         new_lower = level - TWO_PI if side > 0.0 else level
         return new_lower, window, k, level, side
 
+    @njit(**INLINE_OPTIONS)
+    def event_gradient(t, y, data):
+        """g = phi1 + beta(psi) - face: (1, h, 0)."""
+        return 1.0, h_ratio(psi_of(y), data[2]), 0.0
+
+    @njit(**INLINE_OPTIONS)
+    def jacobian_slope(t, y, data):
+        return 0.0, h_slope(psi_of(y), data[2])
+
+    @njit(**INLINE_OPTIONS)
+    def edge_distance(t, y, data):
+        """How far inside the blade's reach a contact is: window - |psi| [rad]."""
+        return data[1] - abs(psi_of(y))
+
     return Contact(model, flight, slide, first, key, from_key, jacobian, normal_speed,
                    striker_speed, normal_acceleration, gap_rate_after, pressed, settle,
-                   _never, flight_data, 2, SECTION_MIN_FLIGHT, LAB_HORIZON, False)
+                   _never, flight_data, 2, SECTION_MIN_FLIGHT, LAB_HORIZON, False,
+                   event_gradient, jacobian_slope, model.driven, edge_distance)

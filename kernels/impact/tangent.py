@@ -1,0 +1,294 @@
+"""The tangent of the impact map: how a small change of a section state propagates through
+one steady cycle, and the multipliers of the cycle's section map.
+
+A perturbation is carried as coordinates (dt, dphi1, dphi1', dpsi, dpsi') at an event
+point: the shift of the event's time and of the state there (at constant rotor speed
+dphi1 = dt and dphi1' = 0; the model converts, ``tangent_state`` / ``tangent_coordinates``).
+A cycle's perturbations are the columns of a 5 x d matrix, one per section coordinate.
+
+- Along a flight from (t0, y0) to the event at t1: the variational equations dY/dt = Df Y,
+  Y(t0) = I, integrated with the state by the same Runge-Kutta steps (the core's flight
+  loop on the augmented state, stopped at t1 by an event on the time, its error control
+  covering Y); at fixed time the perturbation is Y dy0 - f(t1) dt0 (an autonomous flow
+  started dt0 later), and the event moves by dt1 = -g . dy / (dg/dt) (the saltation of the
+  event time; g's gradient from the tool, ``event_gradient``).
+- At an impact: the derivative of Newton's law v+ = v - (1 + R) x (J v)/(J x) (x = M^-1 J^T)
+  with respect to the velocities and, through J and M, to psi.
+- A slide at constant rotor speed ends where the face alone decides (the release, or the
+  blade's edge): its exit does not depend on its entry, the tangent is zero.
+  A slide of the rotor model, and a chatter accumulated into a contact, have no tangent
+  here: the cycle's multipliers are then not computed (NaN).
+- The section map's Jacobian is the d x d block of the chosen coordinates (the rotor speed
+  unless it is constant, psi where the section surface moves with the rotor, psi'); the
+  other coordinates are fixed by the surface or are exact symmetries (a shift of time for an
+  autonomous system, of the rotor angle on the rotor stop), whose neutral multiplier 1 is
+  not one of the pattern.
+"""
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from kernels import INNER_OPTIONS, INLINE_OPTIONS
+from kernels.impact import System
+from kernels.impact.flight import make_flight
+from kernels.impact.outcomes import FLIGHT_EVENT
+from kernels.impact.tuples import relative_scales
+
+#: the rows of a perturbation's coordinates
+DT, DPHI, DW, DPSI, DDPSI = 0, 1, 2, 3, 4
+MAX_SECTION_DIMENSION = 3
+
+#: what the cycle's driver calls to carry the tangent (make_tracker); ``start`` the section
+#: basis, ``flight`` and ``law`` the updates, ``multiplier`` the leading multiplier
+Tracker = namedtuple("Tracker", ["start", "flight", "law", "multiplier"])
+
+
+def _generated(name: str, args: str, body: list[str], namespace: dict):
+    exec(f"def {name}({args}):\n" + "\n".join("    " + line for line in body), namespace)
+    return njit(**INLINE_OPTIONS)(namespace[name])
+
+
+def make_variational(model, n):
+    """``flow_derivative(t0, y0, t1, p, settings) -> (reached, Y)``: the derivative Y (row-
+    major n x n) of the model's flow from t0 to t1 at y0, by the variational equations on
+    the augmented state (y, Y)."""
+    ns = {"rhs": model.rhs, "jacobian": model.jacobian, "scales": model.scales,
+          "relative_scales": relative_scales}
+    y = "(" + ", ".join(f"z[{i}]" for i in range(n)) + ",)"
+    products = [" + ".join(f"J[{i * n + k}] * z[{n + k * n + j}]" for k in range(n))
+                for i in range(n) for j in range(n)]
+    rhs = _generated("augmented_rhs", "z, p", [
+        f"y = {y}", "f = rhs(y, p)", "J = jacobian(y, p)",
+        "return (" + ", ".join([f"f[{i}]" for i in range(n)] + products) + ",)"], ns)
+    z1 = y.replace("z[", "w[")
+    tangent = "(" + ", ".join(f"z[{i}]" for i in range(n, n + n * n)) + ",)"
+    scales = _generated("augmented_scales", "z, w, rtol, atol", [
+        f"a = scales({y}, {z1}, rtol, atol)",
+        f"b = relative_scales({tangent}, {tangent.replace('z[', 'w[')}, rtol, atol)",
+        "return (" + ", ".join([f"a[{i}]" for i in range(n)]
+                               + [f"b[{i}]" for i in range(n * n)]) + ",)"], ns)
+    identity = ", ".join("1.0" if i == j else "0.0" for i in range(n) for j in range(n))
+    extend = _generated("extend", "y", [f"return {y.replace('z[', 'y[')[:-2]}, {identity},)"],
+                        ns)
+    matrix = _generated("matrix", "z", [f"return {tangent}"], ns)
+
+    @njit(**INLINE_OPTIONS)
+    def values(t, z, data):
+        return (t - data,)
+
+    @njit(**INLINE_OPTIONS)
+    def rates(t, z, dz, data):
+        return (1.0,)
+
+    @njit(**INLINE_OPTIONS)
+    def on_event(e, t, z, f, data, p):
+        return True, data
+
+    @njit(**INLINE_OPTIONS)
+    def start_gap(t, z, f, data, p):
+        return 1.0, 0.0  # no restart on a surface: no first-step cap
+
+    @njit(**INLINE_OPTIONS)
+    def monitor(t, z, f):
+        return z[0], f[0], f[1]
+
+    fly, _ = make_flight(System(rhs, scales, values, rates, (1,), on_event, start_gap,
+                                monitor))
+
+    @njit(**INNER_OPTIONS)
+    def flow_derivative(t0, y0, t1, p, settings):
+        fl = fly(t0, extend(y0), p, t1, settings, False)
+        return fl.outcome == FLIGHT_EVENT, matrix(fl.y)
+
+    return flow_derivative
+
+
+@njit(**INNER_OPTIONS)
+def leading_multiplier(a, d):
+    """(|mu|, arg mu in [0, pi]) of the eigenvalue of largest modulus of the d x d matrix
+    a (d <= 3): the characteristic polynomial's roots in closed form (a real root of the
+    cubic by Newton from beyond its roots, the rest by deflation)."""
+    if d == 1:
+        return abs(a[0, 0]), (math.pi if a[0, 0] < 0.0 else 0.0)
+    if d == 2:
+        tr, det = a[0, 0] + a[1, 1], a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
+        return _quadratic_leading(-tr, det)
+    tr = a[0, 0] + a[1, 1] + a[2, 2]
+    minors = (a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0] + a[0, 0] * a[2, 2] - a[0, 2] * a[2, 0]
+              + a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
+    det = (a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
+           - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
+           + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]))
+    c2, c1, c0 = -tr, minors, -det  # mu^3 + c2 mu^2 + c1 mu + c0
+    if not (math.isfinite(c2) and math.isfinite(c1) and math.isfinite(c0)):
+        return math.nan, math.nan
+    bound = 1.0 + max(abs(c2), max(abs(c1), abs(c0)))  # Cauchy: every root inside
+    x = bound if c0 <= 0.0 else -bound  # the cubic's sign there points at a real root
+    for _ in range(200):
+        f = ((x + c2) * x + c1) * x + c0
+        df = (3.0 * x + 2.0 * c2) * x + c1
+        if df == 0.0:
+            break
+        step = f / df
+        x -= step
+        if abs(step) <= 1e-16 * max(1.0, abs(x)):
+            break
+    # the other two: mu^2 + (c2 + x) mu + (c1 + x (c2 + x))
+    modulus, angle = _quadratic_leading(c2 + x, c1 + x * (c2 + x))
+    if abs(x) > modulus:
+        return abs(x), (math.pi if x < 0.0 else 0.0)
+    return modulus, angle
+
+
+@njit(**INNER_OPTIONS)
+def _quadratic_leading(b, c):
+    """The root of largest modulus of mu^2 + b mu + c."""
+    disc = b * b - 4.0 * c
+    if disc >= 0.0:
+        root = -0.5 * (b + math.copysign(math.sqrt(disc), b))  # no cancellation
+        if root == 0.0:
+            return 0.0, 0.0
+        other = c / root
+        big = root if abs(root) >= abs(other) else other
+        return abs(big), (math.pi if big < 0.0 else 0.0)
+    return math.sqrt(c), math.acos(max(-1.0, min(1.0, -0.5 * b / math.sqrt(c))))
+
+
+def make_tracker(c, n):
+    """The tangent's updates for a Contact (see the module docstring)."""
+    model = c.model
+    driven = model.driven
+    state, coordinates = model.tangent_state, model.tangent_coordinates
+    response, response_slope = model.response, model.response_slope
+    monitor, rotor_speed, dpsi_of = model.monitor, model.rotor_speed, model.dpsi
+    gradient, jacobian, jacobian_slope = c.event_gradient, c.jacobian, c.jacobian_slope
+    flow_derivative = make_variational(model, n)
+    exit_fixed = c.slide_exit_fixed
+    as_state = _generated("as_state", "a", [
+        "return (" + ", ".join(f"a[{i}]" for i in range(n)) + ",)"], {})
+
+    @njit(**INNER_OPTIONS)
+    def start(t, y, data, basis):
+        """The section's coordinates as columns of ``basis`` (5 x 3): the rotor speed (if
+        it is a state), psi (if the section surface moves with the rotor), psi'; the rotor
+        angle from the surface; time and (on the rotor stop) the rotor angle are symmetries
+        and held. Returns d and the coordinate rows."""
+        g_phi, g_psi, g_dpsi = gradient(t, y, data)
+        rows = np.zeros(MAX_SECTION_DIMENSION, np.int64)
+        d = 0
+        if not driven:
+            rows[d] = DW
+            d += 1
+        if g_phi != 0.0:
+            rows[d] = DPSI
+            d += 1
+        rows[d] = DDPSI
+        d += 1
+        basis[:, :] = 0.0
+        for j in range(d):
+            basis[rows[j], j] = 1.0
+            if g_phi != 0.0:
+                basis[DPHI, j] = -(g_psi * basis[DPSI, j] + g_dpsi * basis[DDPSI, j]) / g_phi
+                if driven:
+                    basis[DT, j] = basis[DPHI, j]
+        return d, rows
+
+    @njit(**INNER_OPTIONS)
+    def flight(tangent, d, t0, y0, t1, y1, f1, data1, p, settings):
+        """Carry the columns from the event at t0 to the event at t1 (data1: the system
+        data at the arrival). False if the variational flight failed."""
+        if d == 0:
+            return True
+        reached, m = flow_derivative(t0, y0, t1, p, settings)
+        if not reached:
+            return False
+        g_phi, g_psi, g_dpsi = gradient(t1, y1, data1)
+        angle, rate, accel = monitor(t1, y1, f1)
+        g_dot = g_phi * rotor_speed(y1) + g_psi * rate + g_dpsi * accel
+        nn = n
+        for j in range(d):
+            dy0 = state((tangent[0, j], tangent[1, j], tangent[2, j], tangent[3, j],
+                         tangent[4, j]))
+            dy = np.empty(nn)
+            for i in range(nn):
+                acc = -f1[i] * tangent[DT, j]
+                for k in range(nn):
+                    acc += m[i * nn + k] * dy0[k]
+                dy[i] = acc
+            q = coordinates(0.0, as_state(dy))
+            dt1 = -(g_phi * q[DPHI] + g_psi * q[DPSI] + g_dpsi * q[DDPSI]) / g_dot
+            for i in range(nn):
+                dy[i] += f1[i] * dt1
+            out = coordinates(dt1, as_state(dy))
+            for i in range(5):
+                tangent[i, j] = out[i]
+        return math.isfinite(g_dot) and g_dot != 0.0
+
+    @njit(**INNER_OPTIONS)
+    def law(tangent, d, t, y, data, p, r, slid, zeno):
+        """Through a contact from (t, y) before its law: Newton's law differentiated; a
+        slide whose exit the face alone decides zeroes the columns; False where there is no
+        tangent (a slide of the rotor model, an accumulated chatter)."""
+        if d == 0:
+            return True
+        if zeno or (slid and not exit_fixed):
+            return False
+        if slid:
+            tangent[:, :d] = 0.0
+            return True
+        j_phi, j_psi = jacobian(t, y, data)
+        dj_phi, dj_psi = jacobian_slope(t, y, data)
+        x_phi, x_psi = response(y, j_phi, j_psi, p)
+        dx_phi, dx_psi = response_slope(y, j_phi, j_psi, dj_phi, dj_psi, p)
+        w, v = rotor_speed(y), dpsi_of(y)
+        jv, jx = j_phi * w + j_psi * v, j_phi * x_phi + j_psi * x_psi
+        q = jv / jx
+        dq = ((dj_phi * w + dj_psi * v) / jx
+              - jv * (dj_phi * x_phi + dj_psi * x_psi + j_phi * dx_phi + j_psi * dx_psi)
+              / (jx * jx))
+        for j in range(d):
+            dw, dpsi, ddpsi = tangent[DW, j], tangent[DPSI, j], tangent[DDPSI, j]
+            dimpulse = (1.0 + r) * (j_phi * dw + j_psi * ddpsi) / jx
+            bend = (1.0 + r) * dpsi
+            if not driven:
+                tangent[DW, j] = dw - x_phi * dimpulse - bend * (dx_phi * q + x_phi * dq)
+            tangent[DDPSI, j] = ddpsi - x_psi * dimpulse - bend * (dx_psi * q + x_psi * dq)
+        return True
+
+    @njit(**INNER_OPTIONS)
+    def multiplier(tangent, d, rows):
+        a = np.empty((d, d))
+        for i in range(d):
+            for j in range(d):
+                a[i, j] = tangent[rows[i], j]
+        return leading_multiplier(a, d)
+
+    return Tracker(start, flight, law, multiplier)
+
+
+
+@njit(**INLINE_OPTIONS)
+def _no_start(t, y, data, basis):
+    return 0, np.zeros(MAX_SECTION_DIMENSION, np.int64)
+
+
+@njit(**INLINE_OPTIONS)
+def _no_flight(tangent, d, t0, y0, t1, y1, f1, data1, p, settings):
+    return True
+
+
+@njit(**INLINE_OPTIONS)
+def _no_law(tangent, d, t, y, data, p, r, slid, zeno):
+    return True
+
+
+@njit(**INLINE_OPTIONS)
+def _no_multiplier(tangent, d, rows):
+    return math.nan, math.nan
+
+
+#: a driver without the tangent (its sweeps do not ask for multipliers): nothing compiled
+NO_TRACKER = Tracker(_no_start, _no_flight, _no_law, _no_multiplier)

@@ -1,0 +1,348 @@
+"""How robust a pendulum design's steady regime is: the multipliers of its cycle's impact map
+(carried by the variational equations, the event-time saltation and Newton's law
+differentiated), the margins to chatter and to the blade's edge, and the attractors reached
+from several starts.
+
+Oracles: central differences of the section map through the same kernels (an independent
+method: no tangent, only the map run twice per coordinate), the closed-form multiplier R of
+the affine map on the rotor stop, numpy's eigenvalues, and the regime changes the atlas
+itself reports (found by bisection here)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from kernels.pendulum import systems
+from kernels.pendulum.cases import CASE_COLUMNS
+from kernels.rotary_pendulum import DECLARATION as PENDULUM
+from tests import probes
+from tests.conftest import kernel_points
+
+STABILITY = ("multiplier_modulus", "multiplier_angle", "stability_margin",
+             "impact_speed_min_ratio")
+ATTRACTORS = ("attractor_count", "basin_fraction")
+MODEL_CODES = {"paper": 0, "rigid": 1, "rotor": 2}
+TOOL_CODES = {"rotor_stop": 0, "lab_window": 1}
+
+
+def outputs(*names, tool="lab_window"):
+    extra = names + (("edge_margin",) if tool == "lab_window" else ())
+    return PENDULUM.default_outputs + extra
+
+
+def pendulum(method=None, names=STABILITY, **design):
+    """The pendulum kernel on points (arrays or scalars), asking for the stability outputs."""
+    method = dict(method or {})
+    method["outputs"] = outputs(*names, tool=design.get("tool", "rotor_stop"))
+    return kernel_points("rotary_pendulum", method, **design)
+
+
+def leading(matrix):
+    """The eigenvalue of largest modulus (the one with argument >= 0 of a complex pair)."""
+    values = np.linalg.eigvals(np.atleast_2d(matrix))
+    top = values[np.argmax(np.abs(values))]
+    return complex(top.real, abs(top.imag))
+
+
+# ---------------------------------------------------------------- the eigenvalue solver
+
+@pytest.mark.parametrize("d", [1, 2, 3])
+def test_leading_multiplier_equals_numpy_on_random_matrices(d):
+    rng = np.random.default_rng(160 + d)
+    lead = probes.leading_multiplier()
+    for _ in range(400):
+        a = rng.normal(size=(d, d)) * rng.choice([1e-3, 1.0, 10.0])
+        modulus, angle = lead(np.ascontiguousarray(a), d)
+        mu = leading(a)
+        assert modulus == pytest.approx(abs(mu), rel=1e-10, abs=1e-14)
+        if abs(mu) > 1e-8:
+            assert angle == pytest.approx(math.atan2(mu.imag, mu.real), abs=1e-7)
+    # the hard cases: a double root, a zero matrix, a rotation (|mu| = 1, angle known)
+    c, s = math.cos(2.0), math.sin(2.0)
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 0.5]])
+    assert lead(rotation[:d, :d].copy(), d) == pytest.approx(
+        (1.0, 2.0) if d >= 2 else (abs(c), math.pi), abs=1e-12)
+    assert lead(np.zeros((d, d)), d)[0] == pytest.approx(0.0, abs=1e-15)
+
+
+# ---------------------------------------------------------------- the Jacobian's oracle
+
+#: a random design of each system, drawn where its steady cycles live (the blade: kappa > 1,
+#: so the striker swings back after an impact; on the stop kappa > (1 + k)^2/(4 k) for
+#: the rigid pendulum to come back at all; restitution small enough not to escape)
+DOMAIN = {"rotor_stop": dict(k=(0.5, 2.0), R=(0.0, 0.2), xi=(1.0, 8.0), kappa=(1.2, 2.5)),
+          "lab_window": dict(k=(0.5, 2.5), R=(0.001, 0.1), xi=(2.0, 8.0), kappa=(1.05, 1.5),
+                             tool_window=(0.1, 0.5))}
+SYSTEMS = [("paper", "rotor_stop"), ("rigid", "rotor_stop"), ("rotor", "rotor_stop"),
+           ("paper", "lab_window"), ("rigid", "lab_window"), ("rotor", "lab_window")]
+
+
+def draw(rng, tool, n):
+    return {name: rng.uniform(lo, hi, n) for name, (lo, hi) in DOMAIN[tool].items()}
+
+
+def section_jacobians(model, tool, design, rtol=1e-12, eps=2e-4):
+    """(ok, period, carried, differenced) of the section map at a design's steady cycle
+    (tests/probes.py: the probe's own transient from rest, 600 sections); differenced by
+    Richardson's extrapolation of central differences at eps and eps/2 (error O(eps^4)):
+    plain central differences were 1.4e-6 off at eps = 1e-5 on a blade design whose second
+    derivatives are ~3e4, and at eps = 1e-6 the map's own rounding (~1e-11) shows."""
+    case = np.zeros(len(CASE_COLUMNS))
+    values = dict(model=MODEL_CODES[model], tool=TOOL_CODES[tool], tool_window=0.0,
+                  rotor_inertia_ratio=100.0, motor_slope=100.0, idle_speed=1.0) | design
+    for i, name in enumerate(CASE_COLUMNS):
+        case[i] = values[name]
+    params = systems._PARAMETERS[MODEL_CODES[model]](case)
+    data = (systems.stop_data, systems.blade_data)[TOOL_CODES[tool]](case)
+    probe = probes.section_jacobian(model, tool)
+    settings = probes.settings(rtol=rtol, atol=rtol * 1e-2)
+    r = case[CASE_COLUMNS.index("R")]
+    ok, period, carried, coarse = probe(params, data, r, settings, 600, eps)
+    ok_fine, period_fine, _, fine = probe(params, data, r, settings, 600, eps / 2)
+    return (ok and ok_fine and period == period_fine, period, carried,
+            (4.0 * fine - coarse) / 3.0)
+
+
+@pytest.mark.parametrize("model, tool", SYSTEMS)
+def test_multipliers_equal_central_differences_of_the_map_at_random_designs(model, tool):
+    """At random designs with a steady cycle (no chatter, no slide of the rotor model): the
+    kernel's multiplier at its default tolerance (auto, tol 1e-8) and the tangent carried
+    at rtol 1e-12 both agree to 1e-6 with central differences of the section map at rtol
+    1e-12 (Richardson-extrapolated, steps 2e-4 and 1e-4)."""
+    rng = np.random.default_rng(16 + SYSTEMS.index((model, tool)))
+    n = 40 if tool == "rotor_stop" else 120  # most blade designs escape or chatter
+    design = draw(rng, tool, n)
+    out, status, _ = pendulum(model=model, tool=tool, **design)
+    cycles = [j for j in range(n) if status[j] == "ok" and np.isfinite(
+        out["multiplier_modulus"][j])]
+    assert len(cycles) >= 5, f"only {len(cycles)} of {n} random designs have a cycle"
+    met = 0
+    for j in cycles[:8]:
+        one = {name: float(v[j]) for name, v in design.items()}
+        ok, period, carried, differenced = section_jacobians(model, tool, one)
+        assert ok and period >= 1, one
+        mu_fd = leading(differenced)
+        assert abs(leading(carried) - mu_fd) <= 1e-6 * max(1.0, abs(mu_fd)), one
+        mu = out["multiplier_modulus"][j] * np.exp(1j * out["multiplier_angle"][j])
+        # auto refines until its estimate meets tol, at most three times: where the
+        # multiplier is ill-conditioned (a blade design's moved 1.2e-4 from rtol 1e-10 to
+        # 1e-11) it stops short, and its error_estimate says by how much
+        bound = max(1e-6, 2.0 * out["error_estimate"][j]) * max(1.0, abs(mu_fd))
+        assert abs(mu - mu_fd) <= bound, (one, mu, mu_fd, out["error_estimate"][j])
+        met += abs(mu - mu_fd) <= 1e-6 * max(1.0, abs(mu_fd))
+        assert out["stability_margin"][j] == 1.0 - out["multiplier_modulus"][j]
+        if tool == "rotor_stop" and model != "rotor":
+            # the affine map's multiplier is R (P-O6): the kernel reports it in closed form
+            assert out["multiplier_modulus"][j] == one["R"]
+            assert abs(mu_fd - one["R"]) <= 1e-6
+    # within 1e-6 outright at most designs (the rigid blade's large swings past the blade's
+    # faces make 2 of its 8 ill-conditioned: estimates 1.41e-5 and 8.70e-6 against errors
+    # 1.32e-5 and 8.75e-6)
+    assert met >= 0.7 * len(cycles[:8])
+
+
+# ---------------------------------------------------------------- margins at regime changes
+
+def bisect(inside, lo, hi, rounds=40):
+    """The edge between hi (inside(hi) true) and lo (false), as a bracket (lo, hi)."""
+    assert inside(hi) and not inside(lo)
+    for _ in range(rounds):
+        mid = 0.5 * (lo + hi)
+        if inside(mid):
+            hi = mid
+        else:
+            lo = mid
+    return lo, hi
+
+
+def follow(model, design, rs, transient, steps, rtol=1e-11):
+    """tests/probes.follow on the blade: one cycle followed along R."""
+    case = np.zeros(len(CASE_COLUMNS))
+    values = dict(model=MODEL_CODES[model], tool=1, rotor_inertia_ratio=100.0,
+                  motor_slope=100.0, idle_speed=1.0, R=rs[0]) | design
+    for i, name in enumerate(CASE_COLUMNS):
+        case[i] = values[name]
+    params = systems._PARAMETERS[values["model"]](case)
+    return probes.follow(model, "lab_window")(
+        params, systems.blade_data(case), np.asarray(rs, float),
+        probes.settings(rtol=rtol, atol=rtol), transient, steps)
+
+
+#: a rotor-model design on the blade with coexisting cycles (found by following the cycles
+#: of a random search's designs along R): from rest at R = 0.011 it settles into a cycle
+#: hitting the blade once a turn, near its edge
+BORDER = dict(k=1.83664, xi=5.96195, kappa=1.43255, tool_window=0.36767)
+
+
+def test_a_border_collision_is_where_edge_margin_reaches_zero():
+    """Following the once-a-turn cycle down in R, its impact walks out to the blade's edge:
+    edge_margin falls linearly to zero and the cycle ends there (the striker slips past
+    the edge and the machine falls into another cycle); the kernel, from rest, reports the
+    same cycle and margin where it starts."""
+    rs = np.linspace(0.011, 0.007, 81)
+    rows = follow("rotor", BORDER, rs, transient=4000, steps=1500)
+    turn = np.abs(rows[:, 4] - 2.0 * np.pi) < 1e-6  # one impact a rotor turn
+    assert turn[0] and not turn[-1]
+    last = int(np.argmin(turn)) - 1
+    assert turn[:last + 1].all()
+    margin = rows[:last + 1, 3]
+    assert (np.diff(margin) < 0).all() and margin[-1] < 0.02 * margin[0]
+    # where the margin's line (fit through the last 10 points) reaches zero: the branch's
+    # end, to within a step of R (5e-5; it ended 6e-6 before the line's zero)
+    slope, intercept = np.polyfit(rs[last - 9:last + 1], margin[-10:], 1)
+    edge = -intercept / slope
+    step = rs[0] - rs[1]
+    assert rs[last + 1] - step <= edge <= rs[last], (rs[last + 1], edge, rs[last])
+    out, status, _ = pendulum(model="rotor", tool="lab_window", R=0.011, **BORDER)
+    assert status == ["ok"] and out["regime"][0] == 0
+    assert out["edge_margin"][0] == pytest.approx(rows[0, 3], abs=1e-7)
+    assert out["multiplier_modulus"][0] == pytest.approx(rows[0, 1], abs=1e-6)
+
+
+#: coexisting attractors: found by the 8-start scan of rotor-model blade designs (k, R,
+#: window on a grid); from rest a period-n cycle, and about 11 % of the starts reach another
+MULTISTABLE = dict(model="rotor", tool="lab_window", k=1.0, kappa=1.2, R=0.04,
+                   tool_window=0.15)
+
+
+def test_coexisting_attractors_are_counted_and_the_basin_fraction_converges():
+    counts, fractions = [], []
+    for n in (16, 64, 256):
+        out, status, _ = pendulum({"starts": n}, ATTRACTORS, **MULTISTABLE)
+        assert status == ["ok"]
+        counts.append(out["attractor_count"][0])
+        fractions.append(out["basin_fraction"][0])
+    assert counts == [2, 2, 2]
+    assert abs(fractions[2] - fractions[1]) < 0.02 and abs(fractions[1] - fractions[0]) < 0.05
+    assert 0.5 < fractions[2] < 1.0
+    # the same design from rest alone: one start, one attractor
+    out, _, _ = pendulum({"starts": 1}, ATTRACTORS, **MULTISTABLE)
+    assert (out["attractor_count"][0], out["basin_fraction"][0]) == (1, 1.0)
+
+
+@pytest.mark.parametrize("design", [
+    dict(model="rotor", tool="rotor_stop", k=1.0, kappa=1.2, R=0.0),
+    dict(model="paper", tool="rotor_stop", k=1.5, R=0.05),
+    dict(model="rigid", tool="rotor_stop", k=1.0, kappa=2.5, R=0.1,
+         integrator="dopri5"),
+])
+def test_a_single_attractor_design_has_one_at_every_number_of_starts(design):
+    design = dict(design)
+    method = {"starts": 0}
+    if design.pop("integrator", None):
+        method |= {"integrator": "dopri5", "rtol": 1e-10, "atol": 1e-12}
+    for n in (1, 4, 16, 64):
+        method["starts"] = n
+        out, status, _ = pendulum(method, ATTRACTORS, **design)
+        assert status == ["ok"]
+        assert (out["attractor_count"][0], out["basin_fraction"][0]) == (1, 1.0)
+
+
+def test_starts_that_escape_count_as_an_attractor_in_closed_form_and_integrated():
+    """Near R_crit a fast start throws the pendulum over the top: the closed form and the
+    integration core agree on how many of the same starts escape."""
+    design = dict(model="paper", tool="rotor_stop", k=2.0, R=0.2)
+    closed, _, _ = pendulum({"starts": 32}, ATTRACTORS, **design)
+    stepped, _, _ = pendulum({"starts": 32, "integrator": "dopri5", "rtol": 1e-10,
+                              "atol": 1e-12}, ATTRACTORS, **design)
+    assert closed["attractor_count"][0] == 2 == stepped["attractor_count"][0]
+    assert closed["basin_fraction"][0] == stepped["basin_fraction"][0] < 1.0
+
+
+@pytest.mark.parametrize("starts", [2, 5, 9])
+def test_results_do_not_depend_on_chunks_threads_or_asking_with_several_starts(tmp_path,
+                                                                               starts):
+    """An atlas with several starts and the stability outputs is bit-identical at chunk 3 on
+    one thread and chunk 1000 on two, and its regime values equal an atlas without them."""
+    import xarray as xr
+
+    from sweep import runner, spec
+
+    text = f'''
+mechanism = "rotary_pendulum"
+outputs = ["regime", "impact_interval", "multiplier_modulus", "multiplier_angle",
+           "stability_margin", "impact_speed_min_ratio", "edge_margin", "attractor_count",
+           "basin_fraction"]
+[grid]
+R = {{start = 0.04, stop = 0.06, num = 5}}
+tool_window = [0.15, 0.3]
+[fixed]
+model = "rotor"
+tool = "lab_window"
+k = 1.0
+kappa = 1.2
+[method]
+integrator = "dopri5"
+rtol = 1e-9
+atol = 1e-9
+starts = {starts}
+'''
+    paths = []
+    for chunk, workers in ((3, 1), (1000, 2)):
+        path = tmp_path / f"c{chunk}.nc"
+        runner.run_sweep(spec.parse(text), path, chunk=chunk, progress=False,
+                         workers=workers)
+        paths.append(path)
+    with xr.open_dataset(paths[0]) as a, xr.open_dataset(paths[1]) as b:
+        for name in a.data_vars:
+            np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+        assert (a["attractor_count"] >= 1).all() and (a["basin_fraction"] <= 1).all()
+        plain = text.replace(f"starts = {starts}", "").replace(
+            '"multiplier_modulus", "multiplier_angle",\n           "stability_margin", '
+            '"impact_speed_min_ratio", "edge_margin", "attractor_count",\n'
+            '           "basin_fraction"', "")
+        path = tmp_path / "plain.nc"
+        runner.run_sweep(spec.parse(plain), path, chunk=1000, progress=False)
+        with xr.open_dataset(path) as c:
+            for name in c.data_vars:
+                np.testing.assert_array_equal(a[name].values, c[name].values,
+                                              err_msg=name)
+
+
+@pytest.mark.parametrize("lines, key", [
+    ('[method]\nstarts = 4', "method.starts"),
+    ('outputs = ["edge_margin"]', "outputs: edge_margin"),
+    ('[method]\nstarts = 0', "method.starts"),
+])
+def test_stability_spec_errors_are_one_line_before_any_compute(lines, key):
+    from sweep import spec
+    from sweep.errors import UserError
+
+    text = 'mechanism = "rotary_pendulum"\n' + lines + '\n[grid]\nk = [1.0, 2.0]\n'
+    with pytest.raises(UserError) as err:
+        spec.parse(text)
+    assert str(err.value).startswith(key) and "\n" not in str(err.value)
+
+
+def test_stability_outputs_cost_nothing_unless_asked_for():
+    """Without them the atlas has none of them, and the kernel runs no tangent: the same
+    steps as before (the tangent's steps are not counted among the cycle's)."""
+    from sweep import spec
+
+    s = spec.parse('mechanism = "rotary_pendulum"\n[grid]\nk = [1.0, 2.0]\n')
+    for name in STABILITY + ATTRACTORS + ("edge_margin",):
+        assert name not in s.scalar_outputs
+        assert name not in s.method_record.outputs
+
+
+def test_a_chattering_cycle_has_its_slowest_impact_near_zero():
+    """impact_speed_min_ratio over random blade designs: where the cycle accumulates a
+    chatter, its last bounce is slower than the Zeno guard (SPEED_EPS / R in gap units), so
+    the ratio is below 1e-3; every other cycle has a ratio in (0, 1], and one impact a
+    cycle on the rotor stop gives exactly 1."""
+    from kernels.impact.impact_map import SPEED_EPS
+
+    rng = np.random.default_rng(1616)
+    design = draw(rng, "lab_window", 400)
+    out, status, _ = pendulum(model="rigid", tool="lab_window", **design)
+    ok = np.array(status) == "ok"
+    chatter = ok & (out["regime"] == 4)
+    assert chatter.sum() >= 5 and (ok & ~chatter).sum() >= 10
+    ratio = out["impact_speed_min_ratio"]
+    assert (ratio[chatter] < 1e-3).all()
+    assert (ratio[chatter] <= 10 * SPEED_EPS / design["R"][chatter]).all()
+    assert ((ratio[ok] > 0) & (ratio[ok] <= 1)).all()
+    stop, stop_status, _ = pendulum(model="rotor", tool="rotor_stop", k=1.0, kappa=2.0,
+                                    R=[0.0, 0.05, 0.1])
+    assert stop_status == ["ok"] * 3 and (stop["impact_speed_min_ratio"] == 1.0).all()
