@@ -16,9 +16,10 @@ import click
 
 from sweep.errors import UserError
 
-EXAMPLES = {name: f"{name}.toml" for name in ("crank_rocker", "linkage_forces", "six_link",
-                                                "spring_balancer", "rotary_pendulum",
-                                                "rotary_pendulum_blade")}
+#: the built-in specs: every TOML file of the package sweep.examples, by its stem
+EXAMPLES = {entry.name[:-len(".toml")]: entry.name
+            for entry in resources.files("sweep.examples").iterdir()
+            if entry.name.endswith(".toml")}
 DEFAULT_EXAMPLE = "crank_rocker"
 
 
@@ -200,9 +201,10 @@ def examples(name, output):
     """List the built-in specs, or print (or write) one of them as TOML."""
     if name is None:
         import tomllib
+        width = max(map(len, EXAMPLES))
         for key in sorted(EXAMPLES):
             title = tomllib.loads(_example_text(key)).get("title", "")
-            click.echo(f"{key:22s} {title}")
+            click.echo(f"{key:{width}s}  {title}")
         return
     if name not in EXAMPLES:
         raise UserError(f"name: unknown example {name!r}; allowed: {', '.join(EXAMPLES)}")
