@@ -7,6 +7,14 @@ directly or through others (found by reading the imports, lazy ones included): a
 kernels/balancer.py recompiles the balancer and nothing else, an edit to the integration
 core recompiles every pendulum system, and an edit to kernels/__init__.py everything.
 
+Second, numba names each compiled function ``qualname$uid`` with uid from a counter that
+starts at 1 in every process. Two processes that compile closures of one factory in the
+same order (the paper and the rigid pendulum on the blade, each in its own sweep) give them
+the same symbols, and a later process that loads both cached kernels links one body for
+both: measured, a rigid-pendulum sweep run after a paper-pendulum one in the same process
+took the paper model's block (15 of 120 random blade designs changed regime). Uids drawn at
+random make the symbols distinct across processes and forks (numba issue #10486).
+
 ``install()`` must run before any kernel is decorated (numba picks a function's cache
 locator then); kernels/__init__.py calls it.
 """
@@ -14,12 +22,14 @@ locator then); kernels/__init__.py calls it.
 import ast
 import hashlib
 import os
+import secrets
 import shutil
 from functools import lru_cache
 from pathlib import Path
 
 import numba
 from numba.core import caching
+from numba.core.bytecode import FunctionIdentity
 
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("kernels", "tests", "benchmarks")  # whose modules count as the project's
@@ -88,8 +98,23 @@ class ImportClosureLocator(_USER_LOCATOR):
         return super().from_function(py_func, py_file)
 
 
+class _RandomIds:
+    """Function uids for numba's symbol names: random 63-bit numbers, so that code cached by
+    different processes never shares a name with a different body (see the module
+    docstring); a repeat within a process is as likely as two equal random 63-bit draws."""
+
+    def __iter__(self):
+        return self
+
+    def __next__(self) -> int:
+        return secrets.randbits(63)
+
+
 def install() -> None:
-    """Cache under $NUMBA_CACHE_DIR, else kernels/__pycache__, with the closure stamp."""
+    """Cache under $NUMBA_CACHE_DIR, else kernels/__pycache__, with the closure stamp, and
+    with symbol names unique across processes."""
+    if not isinstance(FunctionIdentity._unique_ids, _RandomIds):
+        FunctionIdentity._unique_ids = _RandomIds()
     base = Path(os.environ.get("NUMBA_CACHE_DIR") or Path(__file__).parent / "__pycache__")
     for old in base.glob("numba-*"):  # the caches of a whole-package hash, before this
         shutil.rmtree(old, ignore_errors=True)

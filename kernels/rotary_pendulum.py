@@ -148,8 +148,8 @@ DECLARATION = Mechanism(
                "steady cycle's impact map (of its n-fold map for period_n; exact symmetries "
                "removed): below 1 the pattern is stable; R on the rotor stop at constant rotor "
                "speed; by the variational equations, the event-time saltation and Newton's "
-               "law differentiated; NaN without a cycle, and where the cycle accumulates a "
-               "chatter or the rotor model slides on the blade (no tangent there)", "|μ|",
+               "law differentiated, through slides and accumulated chatter; NaN without a "
+               "cycle", "|μ|",
                on_request=True),
         Output("multiplier_angle", "rad", "argument of the leading multiplier in [0, pi]: "
                "near 0 as |mu| -> 1 a fold (the pattern vanishes), pi a period doubling, "

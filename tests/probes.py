@@ -113,12 +113,13 @@ def chatter(model: str, tool: str):
 @cache
 def zeno(model: str, tool: str):
     """The impact map's contact from a state at a bounce slower than SPEED_EPS: (opens, t,
-    y, data, accumulated, amplitude, peak, cost)."""
+    y, data, slid, accumulated, amplitude, peak, cost)."""
     hit = make_impact_map(contact(model, tool), False).contact
 
     @njit
     def probe(t, y, data, p, r, s):
-        return hit(t, y, data, p, r, s, False)
+        o = hit(t, y, data, p, r, s, False)
+        return o[0], o[1], o[2], o[3], o[4], o[5], o[6], o[7], o[8]
 
     return probe
 
@@ -287,5 +288,41 @@ def follow(model: str, tool: str):
             rows[n, 4] = (rotor_angle(t1, y1) - rotor_angle(t, y)) / period
             rows[n, 5] = 1.0 if ok else 0.0
         return rows
+
+    return probe
+
+
+@cache
+def accumulation(model: str):
+    """The jump to a chatter's accumulation point on the blade, two ways:
+    probe(t, y, data, p, r, settings, column, eps) -> (carried, differenced), 5-vectors in
+    coordinates (dt, dphi1, dphi1', dpsi, dpsi') at the point: the tool's
+    ``accumulation_tangent`` applied to ``column`` (a perturbation of the contact state at
+    (t, y)), and central differences (step eps) of where the impact map's contact puts
+    the striker just after its law (t_law, y_law) from contact states moved along it."""
+    c = contact(model, "lab_window")
+    m = MODELS[model]
+    hit = make_impact_map(c, False).contact
+    accumulate = c.accumulation_tangent
+    compose, rotor_angle, rotor_speed, psi_of, dpsi_of = (m.compose, m.rotor_angle,
+                                                          m.rotor_speed, m.psi, m.dpsi)
+
+    @njit
+    def coordinates(t, y):
+        return np.array([t, rotor_angle(t, y), rotor_speed(y), psi_of(y), dpsi_of(y)])
+
+    @njit
+    def probe(t, y, data, p, r, s, column, eps):
+        tangent = np.zeros((5, 3))
+        tangent[:, 0] = column
+        accumulate(tangent, 1, t, y, data, p, r)
+        ends = np.empty((2, 5))
+        for side in range(2):
+            delta = eps if side == 0 else -eps
+            x = coordinates(t, y) + delta * column
+            t2, y2 = compose(x[0], x[1], x[2], x[3], x[4])
+            o = hit(t2, y2, data, p, r, s, False)
+            ends[side] = coordinates(o[9], o[10])
+        return tangent[:, 0].copy(), (ends[0] - ends[1]) / (2.0 * eps)
 
     return probe

@@ -97,6 +97,15 @@ def relative_stop(model):
     def no_edge(t, y, data):
         return math.inf
 
+    @njit(**INLINE_OPTIONS)
+    def no_slide_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
+        return False  # the test tool's stick carries no tangent (its multiplier is NaN)
+
+    @njit(**INLINE_OPTIONS)
+    def no_accumulation_tangent(tangent, d, t, y, data, p, r):
+        return False, t, y
+
     return Contact(model, flight, stick, first, key, from_key, jacobian, normal_speed,
                    normal_speed, normal_acceleration, gap_rate_after, pressed, settle, never,
-                   same, 1, 0.0, 1e3, False, event_gradient, no_slope, False, no_edge)
+                   same, 1, 0.0, 1e3, False, event_gradient, no_slope, no_slide_tangent,
+                   no_accumulation_tangent, no_edge)

@@ -99,3 +99,28 @@ def test_numba_cache_is_keyed_by_each_modules_import_closure(tmp_path):
         assert isinstance(locator, cache.ImportClosureLocator)
         assert locator.get_source_stamp() == cache.stamp(kernel.py_func.__code__.co_filename)
     assert numba.config.CACHE_DIR
+
+
+def test_cached_kernels_compiled_apart_run_their_own_closures_side_by_side(tmp_path):
+    """numba names a compiled function qualname$uid, uid counted from 1 in each process: two
+    kernels whose closures come from one factory, compiled each in its own process, shared
+    those names, and a process loading both ran one closure for both (the rigid pendulum
+    on the blade ran the paper model's block after a paper sweep: 15 of 120 random designs
+    changed regime). kernels.cache draws uids at random. Two kernels of tests/cache_twins.py
+    (closures adding 1 and 2), compiled in two processes into one cache, then loaded
+    together in either order, must each return their own value."""
+    import os
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+
+    def run(calls):
+        code = f"from tests.cache_twins import plus_one, plus_two\nprint({calls})"
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             check=True, cwd=KERNELS.parent, env=env)
+        return out.stdout.split()
+
+    assert run("plus_one(0.0)") == ["2.0"]  # compiled and cached here
+    assert run("plus_two(0.0)") == ["4.0"]  # and here, in another process
+    assert list(tmp_path.rglob("*plus_one*.nbi")) and list(tmp_path.rglob("*plus_two*.nbi"))
+    assert run("plus_one(0.0), plus_two(0.0)") == ["2.0", "4.0"]
+    assert run("plus_two(0.0), plus_one(0.0)") == ["4.0", "2.0"]

@@ -15,7 +15,7 @@ import pytest
 
 from kernels.pendulum import systems
 from kernels.pendulum.cases import CASE_COLUMNS
-from kernels.rotary_pendulum import DECLARATION as PENDULUM
+from kernels.rotary_pendulum import DECLARATION as PENDULUM, REGIMES
 from tests import probes
 from tests.conftest import kernel_points
 
@@ -24,6 +24,7 @@ STABILITY = ("multiplier_modulus", "multiplier_angle", "stability_margin",
 ATTRACTORS = ("attractor_count", "basin_fraction")
 MODEL_CODES = {"paper": 0, "rigid": 1, "rotor": 2}
 TOOL_CODES = {"rotor_stop": 0, "lab_window": 1}
+CHATTER = REGIMES.index("chatter")
 
 
 def outputs(*names, tool="lab_window"):
@@ -82,10 +83,12 @@ def draw(rng, tool, n):
     return {name: rng.uniform(lo, hi, n) for name, (lo, hi) in DOMAIN[tool].items()}
 
 
-def section_jacobians(model, tool, design, rtol=1e-12, eps=2e-4):
+def section_jacobians(model, tool, design, rtol=1e-12, eps=2e-4, transient=600):
     """(ok, period, carried, differenced) of the section map at a design's steady cycle
     (tests/probes.py: the probe's own transient from rest, 600 sections); differenced by
-    Richardson's extrapolation of central differences at eps and eps/2 (error O(eps^4)):
+    Richardson's extrapolation of central differences at eps and eps/2 (error O(eps^4);
+    not ok where they disagree by more than 25 %: a jump of the map within the step
+    shows as a difference that doubles when the step halves):
     plain central differences were 1.4e-6 off at eps = 1e-5 on a blade design whose second
     derivatives are ~3e4, and at eps = 1e-6 the map's own rounding (~1e-11) shows."""
     case = np.zeros(len(CASE_COLUMNS))
@@ -98,15 +101,18 @@ def section_jacobians(model, tool, design, rtol=1e-12, eps=2e-4):
     probe = probes.section_jacobian(model, tool)
     settings = probes.settings(rtol=rtol, atol=rtol * 1e-2)
     r = case[CASE_COLUMNS.index("R")]
-    ok, period, carried, coarse = probe(params, data, r, settings, 600, eps)
-    ok_fine, period_fine, _, fine = probe(params, data, r, settings, 600, eps / 2)
-    return (ok and ok_fine and period == period_fine, period, carried,
+    ok, period, carried, coarse = probe(params, data, r, settings, transient, eps)
+    ok_fine, period_fine, _, fine = probe(params, data, r, settings, transient, eps / 2)
+    # a map that jumps within eps of the cycle (a chatter's bounce count, a grazing pass)
+    # has no derivative to difference: the two steps then disagree by O(1/eps)
+    smooth = np.all(np.abs(fine - coarse) <= 0.25 * np.maximum(1.0, np.abs(fine)))
+    return (ok and ok_fine and period == period_fine and smooth, period, carried,
             (4.0 * fine - coarse) / 3.0)
 
 
 @pytest.mark.parametrize("model, tool", SYSTEMS)
 def test_multipliers_equal_central_differences_of_the_map_at_random_designs(model, tool):
-    """At random designs with a steady cycle (no chatter, no slide of the rotor model): the
+    """At random designs with a steady cycle (chatter: the next test): the
     kernel's multiplier at its default tolerance (auto, tol 1e-8) and the tangent carried
     at rtol 1e-12 both agree to 1e-6 with central differences of the section map at rtol
     1e-12 (Richardson-extrapolated, steps 2e-4 and 1e-4)."""
@@ -115,7 +121,7 @@ def test_multipliers_equal_central_differences_of_the_map_at_random_designs(mode
     design = draw(rng, tool, n)
     out, status, _ = pendulum(model=model, tool=tool, **design)
     cycles = [j for j in range(n) if status[j] == "ok" and np.isfinite(
-        out["multiplier_modulus"][j])]
+        out["multiplier_modulus"][j]) and out["regime"][j] != CHATTER]
     assert len(cycles) >= 5, f"only {len(cycles)} of {n} random designs have a cycle"
     met = 0
     for j in cycles[:8]:
@@ -140,6 +146,113 @@ def test_multipliers_equal_central_differences_of_the_map_at_random_designs(mode
     # faces make 2 of its 8 ill-conditioned: estimates 1.41e-5 and 8.70e-6 against errors
     # 1.32e-5 and 8.75e-6)
     assert met >= 0.7 * len(cycles[:8])
+
+
+#: where the tangent leaves free flight: the rotor model's plastic impacts (R = 0) stick and
+#: the striker slides along the blade's face (a flight of the constrained system); with
+#: R > 0 a chatter accumulates (the Zeno guard's jump to the accumulation point) and then
+#: slides, on the rotor model by integration, at constant rotor speed in closed form (whose
+#: exit the face alone decides: the multiplier is 0)
+THROUGH_CONTACT = [("rotor", "slide"), ("rotor", "chatter"), ("rigid", "chatter"),
+                   ("paper", "chatter")]
+
+
+@pytest.mark.parametrize("model, case", THROUGH_CONTACT)
+def test_multipliers_through_a_slide_and_an_accumulated_chatter_equal_central_differences(
+        model, case):
+    """Every such cycle of random blade designs has a multiplier, and at those where the
+    probe's own sequence (60 sections from rest at rtol 1e-12) reaches a cycle the tangent
+    carried through the slide's variational equations and its end event, and through the
+    accumulation point, agrees with central differences of the section map to 1e-6, and
+    the atlas's value too (within twice its error estimate where that is larger). Why the
+    probe may not reach a cycle or differences may not exist: a chatter cycle can be one
+    rounding from a grazing pass (a driven blade design's drifted into a miss after 74
+    sections at rtol 1e-12), and its map can jump within the difference step (a chatter's
+    bounce count changes; differences of -4986 against a map that is constant nearby)."""
+    rng = np.random.default_rng(1600 + THROUGH_CONTACT.index((model, case)))
+    n = 120 if model == "rotor" else 400  # chatter on a driven blade is rarer
+    design = draw(rng, "lab_window", n)
+    if case == "slide":
+        design["R"] = np.zeros(n)
+    out, status, _ = pendulum(model=model, tool="lab_window", **design)
+    cycle = np.isin(out["regime"], [REGIMES.index(r) for r in ("period_1", "period_n",
+                                                                "chatter")])
+    chosen = [j for j in range(n) if status[j] == "ok" and cycle[j]
+              and (case == "slide" or out["regime"][j] == CHATTER)]
+    assert len(chosen) >= 3, f"only {len(chosen)} of {n} random designs"
+    assert np.all(np.isfinite(out["multiplier_modulus"][chosen]))
+    if model != "rotor":
+        assert np.all(out["multiplier_modulus"][chosen] == 0.0)
+    compared = 0
+    for j in chosen[:8]:
+        one = {name: float(v[j]) for name, v in design.items()}
+        ok, period, carried, differenced = section_jacobians(model, "lab_window", one,
+                                                             transient=60)
+        if not ok:
+            continue
+        compared += 1
+        mu_fd = leading(differenced)
+        assert abs(leading(carried) - mu_fd) <= 1e-6 * max(1.0, abs(mu_fd)), one
+        mu = out["multiplier_modulus"][j] * np.exp(1j * out["multiplier_angle"][j])
+        bound = max(1e-6, 2.0 * out["error_estimate"][j]) * max(1.0, abs(mu_fd))
+        assert abs(mu - mu_fd) <= bound, (one, mu, mu_fd, out["error_estimate"][j])
+    assert compared >= min(5, len(chosen) - 1), compared
+
+
+@pytest.mark.parametrize("model", ["paper", "rigid", "rotor"])
+def test_the_jump_to_a_chatters_accumulation_point_is_differentiated(model):
+    """A chatter's last bounces contract its perturbations by R each, so through a whole
+    cycle the jump's own derivative hardly shows (zeroing the tail's term left the
+    cycle test passing): here it is tested alone. At random contacts on the blade's face
+    whose bounce would leave slower than the Zeno guard's speed (approach 0.5 SPEED_EPS/R),
+    and random perturbations that keep the contact on the face, the carried column equals
+    central differences of where the impact map's contact puts the striker after the jump
+    and the plastic law, to 1e-5 of the column's size (the tail's time moves by
+    2R/((1 - R) g) per unit of approach speed: coefficients up to ~30). The step is at
+    most 1e-8 and keeps the moved approach below the threshold; the differences' own
+    noise is ~1e-7 at step 1e-8 and 2e-5 at 1e-10 (the face's Newton solve and the
+    rotor angle's rounding over a step that small)."""
+    from kernels.impact.impact_map import SPEED_EPS
+    rng = np.random.default_rng(1610 + ["paper", "rigid", "rotor"].index(model))
+    probe = probes.accumulation(model)
+    settings = probes.settings()
+    tried = 0
+    for _ in range(40):
+        design = {name: float(v[0]) for name, v in draw(rng, "lab_window", 1).items()}
+        design["R"] = rng.uniform(0.05, 0.5)
+        case = np.zeros(len(CASE_COLUMNS))
+        values = dict(model=MODEL_CODES[model], tool=1, rotor_inertia_ratio=100.0,
+                      motor_slope=100.0, idle_speed=1.0) | design
+        for i, name in enumerate(CASE_COLUMNS):
+            case[i] = values[name]
+        p = systems._PARAMETERS[MODEL_CODES[model]](case)
+        lower, window, k, level, side = systems.blade_data(case)
+        r = design["R"]
+        psi = rng.uniform(-0.8, 0.8) * window
+        w = 1.0 if model != "rotor" else rng.uniform(0.8, 1.2)
+        x = k * k + 1.0 + 2.0 * k * math.cos(psi)  # the contact point's radius squared
+        h, h_slope = (1.0 + k * math.cos(psi)) / x, k * (1.0 - k * k) * math.sin(psi) / x**2
+        approach = 0.5 * SPEED_EPS / r  # closing at G' = approach on the face met rising
+        phi1 = -math.atan2(math.sin(psi), k + math.cos(psi))  # on the face G = 0
+        t = phi1 if model != "rotor" else 0.0
+        y = (psi, (approach - w) / h) if model != "rotor" else (phi1, w, psi,
+                                                                (approach - w) / h)
+        data = (lower, window, k, 0.0, 1.0)
+        column = rng.normal(size=5)
+        column[1] = -h * column[3]  # the moved contact stays on the face
+        if model != "rotor":
+            column[0], column[2] = column[1], 0.0  # the rotor angle is the time
+        # keep the moved approach below the guard's threshold: the jump exists on both sides
+        d_approach = column[2] + h * column[4] + h_slope * y[-1] * column[3]
+        eps = min(1e-8, 0.25 * approach / max(abs(d_approach), 1e-300))
+        carried, differenced = probe(t, y, data, p, r, settings, column, eps)
+        if not np.all(np.isfinite(differenced)):
+            continue
+        tried += 1
+        scale = np.max(np.abs(carried))
+        assert np.allclose(carried, differenced, rtol=1e-5, atol=1e-5 * scale), (
+            design, psi, carried, differenced)
+    assert tried >= 30
 
 
 # ---------------------------------------------------------------- margins at regime changes
@@ -172,6 +285,47 @@ def follow(model, design, rs, transient, steps, rtol=1e-11):
 #: a rotor-model design on the blade with coexisting cycles (found by following the cycles
 #: of a random search's designs along R): from rest at R = 0.011 it settles into a cycle
 #: hitting the blade once a turn, near its edge
+#: a paper-model blade design whose once-a-cycle blow loses stability by period doubling
+#: as R falls: found by a scan of 3000 random blade designs for period_1 cycles with a
+#: negative multiplier of modulus > 0.95 far from the blade's edge (edge margin 0.43 rad),
+#: then followed in R; most flip-type cycles of the earlier scans along R ended at a
+#: border collision or a jump to another attractor before |mu| reached 1
+FLIP = dict(model="paper", tool="lab_window", k=2.71573, xi=3.36865, tool_window=0.70681)
+
+
+def test_a_period_doubling_is_where_the_multiplier_reaches_minus_one():
+    """Along R, the period_1 pattern's leading multiplier is real and negative (angle pi)
+    and its modulus rises as R falls; where its linear trend reaches 1, the regime from
+    rest turns period_n (found by bisection on the atlas's regime), and there the period-2
+    pattern's own multiplier (of the two-fold map: mu^2 of the flip, angle 0) rises to 1
+    from the other side. Near R* the pattern converges like |mu|^n, so max_impacts is
+    raised to 20000; within ~5e-4 of R* neither pattern settles to tol 1e-8 in the
+    map's rounding (|mu| 0.99: the noise of the adaptive steps is amplified
+    1/(1 - |mu|^2)), and the bisection stops there, on the stable side."""
+    method = {"max_impacts": 20000}
+
+    def at(r):
+        r = np.atleast_1d(r)
+        out, _, _ = pendulum(method=method, R=r, **FLIP)
+        return out["regime"], out["multiplier_modulus"], out["multiplier_angle"]
+
+    stable = np.linspace(0.165, 0.170, 6)
+    regime, modulus, angle = at(stable)
+    assert np.all(regime == REGIMES.index("period_1")) and np.all(angle == math.pi)
+    assert np.all(np.diff(modulus) < 0.0) and modulus[0] > 0.95  # rises as R falls
+    slope, offset = np.polyfit(stable, modulus, 1)
+    r_star = (1.0 - offset) / slope  # where the trend reaches |mu| = 1
+    lo, hi = bisect(lambda r: at(r)[0][0] == REGIMES.index("period_1"), 0.160, 0.170,
+                    rounds=20)
+    assert 0.0 <= hi - r_star <= 1e-3, (hi, r_star)
+    regime, modulus, angle = at(hi)
+    assert modulus[0] > 0.985 and angle[0] == math.pi
+    below = r_star - np.array([0.002, 0.001, 0.0005])
+    regime, modulus, angle = at(below)
+    assert np.all(regime == REGIMES.index("period_n")) and np.all(angle == 0.0)
+    assert np.all(np.diff(modulus) > 0.0) and np.all(modulus < 1.0) and modulus[-1] > 0.95
+
+
 BORDER = dict(k=1.83664, xi=5.96195, kappa=1.43255, tool_window=0.36767)
 
 

@@ -54,11 +54,14 @@ System = namedtuple("System", ["rhs", "scales", "event_values", "event_rates", "
 #: after a contact; which flight event is an escape; the shortest flight that opens a new
 #: section; the flights' horizon; and whether the section map is smooth (Aitken may
 #: extrapolate it). For the tangent of the map (tangent.py): the gradient of the contact
-#: surface in (phi1, psi, psi') at a contact, d/dpsi of the contact Jacobian, whether a
-#: slide's exit is decided by the face alone; and the distance of a contact from the tool's
-#: edge (inf: the tool has none)
+#: surface in (phi1, psi, psi') at a contact, d/dpsi of the contact Jacobian, the tangent
+#: through a slide (slide_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings) from
+#: just after the law to the slide's end) and to a chatter's accumulation point
+#: (accumulation_tangent(tangent, d, t, y, data, p, r) -> (ok, t, y) there); and the
+#: distance of a contact from the tool's edge (inf: the tool has none)
 Contact = namedtuple("Contact", [
     "model", "flight", "slide", "first", "key", "from_key", "jacobian", "normal_speed",
     "striker_speed", "normal_acceleration", "gap_rate_after", "pressed", "settle",
     "escapes_before", "flight_data", "escape_event", "min_flight", "horizon", "smooth",
-    "event_gradient", "jacobian_slope", "slide_exit_fixed", "edge_distance"])
+    "event_gradient", "jacobian_slope", "slide_tangent", "accumulation_tangent",
+    "edge_distance"])

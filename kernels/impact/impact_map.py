@@ -168,7 +168,8 @@ def make_impact_map(c, jump_early, stability=False):
 
     @njit(**INNER_OPTIONS)
     def contact(t, y, data, p, r, settings, refine):
-        """A contact: (opens, t, y, data, slid, chatter, amplitude, peak, cost)."""
+        """A contact: (opens, t, y, data, slid, chatter, amplitude, peak, cost, t_law,
+        y_law); (t_law, y_law) just after the law, where a slide starts."""
         approach = normal_speed(t, y, data, p)
         # the chatter accumulates once the bounce it would start falls below SPEED_EPS:
         # its flight would be shorter than the resolution of the event search
@@ -181,11 +182,11 @@ def make_impact_map(c, jump_early, stability=False):
         # a plastic contact pressed into the tool rides it (the law first: on a rotor of
         # finite inertia the impulse also changes the rotor's speed)
         if (r == 0.0 or zeno) and pressed(t, y, data, p):
-            released, t, y, data, amplitude, peak, cost = slide(t, y, data, p, settings,
-                                                                refine)
-            return True, t, y, data, True, zeno, amplitude, peak, cost
+            released, t1, y1, data1, amplitude, peak, cost = slide(t, y, data, p,
+                                                                   settings, refine)
+            return True, t1, y1, data1, True, zeno, amplitude, peak, cost, t, y
         return (gap_rate_after(t, y, data, p) < 0.0, t, y, data, False, zeno, 0.0, 0.0,
-                NO_COST)
+                NO_COST, t, y)
 
     @njit(**INNER_OPTIONS)
     def section(t, y, data, p, r, settings, refine, tangent, d):
@@ -201,10 +202,10 @@ def make_impact_map(c, jump_early, stability=False):
             speed_min, speed_max = min(speed_min, speed), max(speed_max, speed)
             edge = min(edge, edge_distance(t, y, data))
             t0, y0, data0 = t, y, data
-            opens, t, y, data, slid, zeno, a, pk, spent = contact(t, y, data, p, r,
-                                                                  settings, refine)
-            tangent_ok = tangent_ok and track_law(tangent, d, t0, y0, data0, p, r, slid,
-                                                  zeno)
+            (opens, t, y, data, slid, zeno, a, pk, spent, t_law,
+             y_law) = contact(t, y, data, p, r, settings, refine)
+            tangent_ok = tangent_ok and track_law(tangent, d, t0, y0, data0, t_law, y_law,
+                                                  t, y, data, p, r, slid, zeno, settings)
             cost = add(cost, spent)
             chatter = chatter or zeno
             amplitude, peak = max(amplitude, a), max(peak, pk)

@@ -14,10 +14,14 @@ A cycle's perturbations are the columns of a 5 x d matrix, one per section coord
   event time; g's gradient from the tool, ``event_gradient``).
 - At an impact: the derivative of Newton's law v+ = v - (1 + R) x (J v)/(J x) (x = M^-1 J^T)
   with respect to the velocities and, through J and M, to psi.
-- A slide at constant rotor speed ends where the face alone decides (the release, or the
-  blade's edge): its exit does not depend on its entry, the tangent is zero.
-  A slide of the rotor model, and a chatter accumulated into a contact, have no tangent
-  here: the cycle's multipliers are then not computed (NaN).
+- At a chatter accumulated into a contact (the Zeno guard's jump to the accumulation
+  point, the ballistic tail 2 R v_n/(g (1 - R))): the derivative of the tool's settle,
+  through the tail's time, then of the plastic law there (``Contact.accumulation_tangent``).
+- Through a slide (``Contact.slide_tangent``): at constant rotor speed the exit is decided by
+  the face alone (the release, or the blade's edge), so the tangent is zero; a slide of the
+  rotor model is a flight of the constrained system on the face, carried like a free
+  flight by the same variational flight (``make_variational`` on the face's vector field)
+  and the saltation of its end event.
 - The section map's Jacobian is the d x d block of the chosen coordinates (the rotor speed
   unless it is constant, psi where the section surface moves with the rotor, psi'); the
   other coordinates are fixed by the surface or are exact symmetries (a shift of time for an
@@ -41,6 +45,10 @@ from kernels.impact.tuples import relative_scales
 DT, DPHI, DW, DPSI, DDPSI = 0, 1, 2, 3, 4
 MAX_SECTION_DIMENSION = 3
 
+#: a vector field for the variational equations: rhs(y, p), its Jacobian (row-major) and
+#: the error scales (a model, or the constrained system of a slide)
+Field = namedtuple("Field", ["rhs", "jacobian", "scales"])
+
 #: what the cycle's driver calls to carry the tangent (make_tracker); ``start`` the section
 #: basis, ``flight`` and ``law`` the updates, ``multiplier`` the leading multiplier
 Tracker = namedtuple("Tracker", ["start", "flight", "law", "multiplier"])
@@ -51,10 +59,16 @@ def _generated(name: str, args: str, body: list[str], namespace: dict):
     return njit(**INLINE_OPTIONS)(namespace[name])
 
 
+def _as_tuple(n):
+    """``as_state(a)``: the first n entries of an array as a tuple (a model's state)."""
+    return _generated("as_state", "a", [
+        "return (" + ", ".join(f"a[{i}]" for i in range(n)) + ",)"], {})
+
+
 def make_variational(model, n):
     """``flow_derivative(t0, y0, t1, p, settings) -> (reached, Y)``: the derivative Y (row-
-    major n x n) of the model's flow from t0 to t1 at y0, by the variational equations on
-    the augmented state (y, Y)."""
+    major n x n) of the flow of ``model`` (a Field: a model, or a slide's constrained
+    system) from t0 to t1 at y0, by the variational equations on the augmented state."""
     ns = {"rhs": model.rhs, "jacobian": model.jacobian, "scales": model.scales,
           "relative_scales": relative_scales}
     y = "(" + ", ".join(f"z[{i}]" for i in range(n)) + ",)"
@@ -157,6 +171,29 @@ def _quadratic_leading(b, c):
     return math.sqrt(c), math.acos(max(-1.0, min(1.0, -0.5 * b / math.sqrt(c))))
 
 
+def make_acceleration_differential(model, n):
+    """``differential(y, p, c) -> (d phi1'', d psi'')``: how the free accelerations change
+    along a perturbation c in coordinates (dt, dphi1, dphi1', dpsi, dpsi'), by the model's
+    Jacobian (the flow is autonomous: dt does not enter)."""
+    state, coordinates, jacobian = model.tangent_state, model.tangent_coordinates, model.jacobian
+    as_state = _as_tuple(n)
+
+    @njit(**INNER_OPTIONS)
+    def differential(y, p, c):
+        m = jacobian(y, p)
+        dy = state(c)
+        out = np.empty(n)
+        for i in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += m[i * n + k] * dy[k]
+            out[i] = acc
+        q = coordinates(0.0, as_state(out))
+        return q[DW], q[DDPSI]
+
+    return differential
+
+
 def make_tracker(c, n):
     """The tangent's updates for a Contact (see the module docstring)."""
     model = c.model
@@ -166,9 +203,8 @@ def make_tracker(c, n):
     monitor, rotor_speed, dpsi_of = model.monitor, model.rotor_speed, model.dpsi
     gradient, jacobian, jacobian_slope = c.event_gradient, c.jacobian, c.jacobian_slope
     flow_derivative = make_variational(model, n)
-    exit_fixed = c.slide_exit_fixed
-    as_state = _generated("as_state", "a", [
-        "return (" + ", ".join(f"a[{i}]" for i in range(n)) + ",)"], {})
+    slide_tangent, accumulation_tangent = c.slide_tangent, c.accumulation_tangent
+    as_state = _as_tuple(n)
 
     @njit(**INNER_OPTIONS)
     def start(t, y, data, basis):
@@ -228,17 +264,17 @@ def make_tracker(c, n):
         return math.isfinite(g_dot) and g_dot != 0.0
 
     @njit(**INNER_OPTIONS)
-    def law(tangent, d, t, y, data, p, r, slid, zeno):
-        """Through a contact from (t, y) before its law: Newton's law differentiated; a
-        slide whose exit the face alone decides zeroes the columns; False where there is no
-        tangent (a slide of the rotor model, an accumulated chatter)."""
+    def law(tangent, d, t, y, data, t_law, y_law, t1, y1, data1, p, r, slid, zeno,
+            settings):
+        """Through a contact from (t, y) before its law to (t1, y1) after it (and after its
+        slide, which starts at (t_law, y_law)): an accumulated chatter's settle, Newton's
+        law differentiated, the slide's tangent. False where the tangent failed."""
         if d == 0:
             return True
-        if zeno or (slid and not exit_fixed):
-            return False
-        if slid:
-            tangent[:, :d] = 0.0
-            return True
+        ok = True
+        if zeno and r > 0.0:  # to the accumulation point; the law there is plastic
+            ok, t, y = accumulation_tangent(tangent, d, t, y, data, p, r)
+            r = 0.0
         j_phi, j_psi = jacobian(t, y, data)
         dj_phi, dj_psi = jacobian_slope(t, y, data)
         x_phi, x_psi = response(y, j_phi, j_psi, p)
@@ -256,7 +292,10 @@ def make_tracker(c, n):
             if not driven:
                 tangent[DW, j] = dw - x_phi * dimpulse - bend * (dx_phi * q + x_phi * dq)
             tangent[DDPSI, j] = ddpsi - x_psi * dimpulse - bend * (dx_psi * q + x_psi * dq)
-        return True
+        if slid:
+            ok = ok and slide_tangent(tangent, d, t_law, y_law, data, t1, y1, data1, p,
+                                      settings)
+        return ok
 
     @njit(**INNER_OPTIONS)
     def multiplier(tangent, d, rows):
@@ -281,7 +320,8 @@ def _no_flight(tangent, d, t0, y0, t1, y1, f1, data1, p, settings):
 
 
 @njit(**INLINE_OPTIONS)
-def _no_law(tangent, d, t, y, data, p, r, slid, zeno):
+def _no_law(tangent, d, t, y, data, t_law, y_law, t1, y1, data1, p, r, slid, zeno,
+            settings):
     return True
 
 

@@ -35,6 +35,8 @@ from kernels.impact.events import make_illinois
 from kernels.impact.flight import Flight, make_flight
 from kernels.impact.impact_map import radical_inverse
 from kernels.impact.outcomes import FLIGHT_EVENT, NO_COST
+from kernels.impact.tangent import (DDPSI, DPHI, DPSI, DT, DW, Field,
+                                    make_acceleration_differential, make_variational)
 from kernels.impact.tuples import relative_scales
 
 TWO_PI = 2.0 * math.pi
@@ -58,6 +60,14 @@ def h_slope(psi, k):
     """dh/dpsi = k (1 - k^2) sin psi / X^2."""
     x = k * k + 1.0 + 2.0 * k * math.cos(psi)
     return k * (1.0 - k * k) * math.sin(psi) / (x * x)
+
+
+@njit(**INLINE_OPTIONS)
+def h_curvature(psi, k):
+    """d2h/dpsi2 = k (1 - k^2) (X cos psi + 4 k sin^2 psi)/X^3."""
+    s, c = math.sin(psi), math.cos(psi)
+    x = k * k + 1.0 + 2.0 * k * c
+    return k * (1.0 - k * k) * (x * c + 4.0 * k * s * s) / (x * x * x)
 
 
 @njit(**INNER_OPTIONS)
@@ -84,6 +94,24 @@ def _no_slope(t, y, data):
 @njit(**INLINE_OPTIONS)
 def _no_edge(t, y, data):
     return math.inf
+
+
+@njit(**INLINE_OPTIONS)
+def _no_slide_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
+    return True  # the tool has no slide
+
+
+@njit(**INLINE_OPTIONS)
+def _fixed_exit_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
+    """A slide at constant rotor speed ends where the face alone decides (the release, or
+    the blade's edge): its exit does not depend on its entry."""
+    tangent[:, :d] = 0.0
+    return True
+
+
+@njit(**INLINE_OPTIONS)
+def _settle_in_place(tangent, d, t, y, data, p, r):
+    return True, t, y  # the accumulated law acts where the contact is
 
 
 def stop_flight(model):
@@ -181,7 +209,7 @@ def rotor_stop(model):
     return Contact(model, flight, no_slide, first, key, from_key, jacobian, normal_speed,
                    normal_speed, normal_acceleration, gap_rate_after, _never, settle,
                    escapes_before, flight_data, 1, 0.0, math.inf, True, event_gradient,
-                   _no_slope, True, _no_edge)
+                   _no_slope, _no_slide_tangent, _settle_in_place, _no_edge)
 
 
 SLIDE_SAMPLES = 128  # pressing samples along a kinematic slide (a release is bracketed)
@@ -253,16 +281,19 @@ def _kinematic_slide(model, free_gap_acceleration):
         return (released, t_end, y_end, after_slide(released, data),
                 max(abs(psi_c), abs(end)), peak, NO_COST)
 
-    return slide
+    return slide, _fixed_exit_tangent
 
 
 def _constrained_slide(model):
     """The slide of a rotor of finite inertia: a flight of the constrained system (psi,
     psi') on the face G = level, the rotor angle phi1 = level - beta(psi) and speed -h psi';
     psi'' keeps G'' = 0 with the contact force along J = (1, h), until the pressing
-    vanishes (release) or |psi| reaches the blade's edge."""
+    vanishes (release) or |psi| reaches the blade's edge. Returns the slide and its tangent
+    (the variational equations of the constrained system, kernels/impact/tangent.py)."""
     compose, accelerations, response = model.compose, model.accelerations, model.response
-    psi_of, rotor_speed = model.psi, model.rotor_speed
+    response_slope, psi_of, dpsi_of = model.response_slope, model.psi, model.dpsi
+    rotor_speed = model.rotor_speed
+    differential = make_acceleration_differential(model, 4)
 
     @njit(**INLINE_OPTIONS)
     def on_face(t, s, sp):
@@ -324,7 +355,74 @@ def _constrained_slide(model):
         return (released, t_end, y_end, after_slide(released, data), fl.amplitude, fl.peak,
                 fl.cost)
 
-    return slide
+    @njit(**INNER_OPTIONS)
+    def face_field(s, sp):
+        """On the face at s = (psi, psi'): psi'' and its gradient in s, the free G'' (the
+        pressing) and its gradient, by the chain rule through the face (phi1 = level -
+        beta(psi), phi1' = -h psi'), the model's Jacobian and d(M^-1 J^T)/dpsi."""
+        p, k = sp[0], sp[2]
+        psi, v = s
+        acc, g2 = slide_state(0.0, s, sp)
+        tt, y = on_face(0.0, s, sp)
+        hr, hs = h_ratio(psi, k), h_slope(psi, k)
+        a_phi, a_psi = accelerations(tt, y, p)
+        dphi_psi, dpsi_psi = differential(y, p, (0.0, -hr, -hs * v, 1.0, 0.0))
+        dphi_v, dpsi_v = differential(y, p, (0.0, 0.0, -hr, 0.0, 1.0))
+        g2_psi = dphi_psi + hr * dpsi_psi + hs * a_psi + h_curvature(psi, k) * v * v
+        g2_v = dphi_v + hr * dpsi_v + 2.0 * hs * v
+        x_phi, x_psi = response(y, 1.0, hr, p)
+        dx_phi, dx_psi = response_slope(y, 1.0, hr, 0.0, hs, p)
+        jx = x_phi + hr * x_psi
+        djx = dx_phi + hr * dx_psi + hs * x_psi
+        acc_psi = dpsi_psi - (dx_psi * g2 + x_psi * g2_psi) / jx + x_psi * g2 * djx / (jx * jx)
+        acc_v = dpsi_v - x_psi * g2_v / jx
+        return acc, acc_psi, acc_v, g2, g2_psi, g2_v
+
+    @njit(**INLINE_OPTIONS)
+    def face_jacobian(s, sp):
+        field = face_field(s, sp)
+        return 0.0, 1.0, field[1], field[2]
+
+    flow_derivative = make_variational(Field(slide_rhs, face_jacobian, relative_scales), 2)
+
+    @njit(**INNER_OPTIONS)
+    def slide_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
+        """The columns through a slide from (t, y) just after the law to its end (t1, y1):
+        onto the face (psi' = -phi1'/h), along the constrained flow by its variational
+        equations, through the end event (the release where side G'' falls to 0, or the
+        blade's edge, |psi| = window; after_slide's side 0 says which), off the face."""
+        lower, window, k, level, side = data
+        sp = (p, level, k)
+        psi, w = psi_of(y), rotor_speed(y)
+        h0, slope0 = h_ratio(psi, k), h_slope(psi, k)
+        reached, m = flow_derivative(t, (psi, -w / h0), t1, sp, settings)
+        if not reached:
+            return False
+        s1 = (psi_of(y1), dpsi_of(y1))
+        f1 = slide_rhs(s1, sp)
+        field = face_field(s1, sp)
+        if data1[4] != 0.0:
+            e_psi, e_v = side * field[4], side * field[5]
+        else:
+            e_psi, e_v = math.copysign(1.0, s1[0]), 0.0
+        e_dot = e_psi * f1[0] + e_v * f1[1]
+        h1, slope1 = h_ratio(s1[0], k), h_slope(s1[0], k)
+        for j in range(d):
+            dt0, dpsi0 = tangent[DT, j], tangent[DPSI, j]
+            dv0 = -tangent[DW, j] / h0 + w * slope0 / (h0 * h0) * dpsi0
+            a = m[0] * dpsi0 + m[1] * dv0 - f1[0] * dt0
+            b = m[2] * dpsi0 + m[3] * dv0 - f1[1] * dt0
+            dt1 = -(e_psi * a + e_v * b) / e_dot
+            a += f1[0] * dt1
+            b += f1[1] * dt1
+            tangent[DT, j] = dt1
+            tangent[DPHI, j] = -h1 * a
+            tangent[DW, j] = -slope1 * s1[1] * a - h1 * b
+            tangent[DPSI, j] = a
+            tangent[DDPSI, j] = b
+        return math.isfinite(e_dot) and e_dot != 0.0
+
+    return slide, slide_tangent
 
 
 def lab_window(model):
@@ -401,9 +499,9 @@ def lab_window(model):
                       fl.cost)
 
     if model.driven:
-        slide = _kinematic_slide(model, free_gap_acceleration)
+        slide, slide_tangent = _kinematic_slide(model, free_gap_acceleration)
     else:
-        slide = _constrained_slide(model)
+        slide, slide_tangent = _constrained_slide(model)
 
     @njit(**INLINE_OPTIONS)
     def first(p, data, start):
@@ -488,6 +586,45 @@ def lab_window(model):
         psi = face_psi(level - phi1, psi_of(y), k)
         return compose(t + dt, phi1, w, psi, -w / h_ratio(psi, k))
 
+    differential = make_acceleration_differential(model, 2 if model.driven else 4)
+
+    @njit(**INNER_OPTIONS)
+    def accumulation_tangent(tangent, d, t, y, data, p, r):
+        """The columns from a contact (t, y) whose chatter accumulates to its accumulation
+        point (``settle`` after the tail 2 R |v_n|/(|G''| (1 - R)), the contact's own
+        formula), which it returns: the tail's time moves with the approach speed and
+        the free G'' (the model's Jacobian), the rotor turns on at its speed, psi follows
+        the face, the normal speed is zero."""
+        k, side = data[2], data[4]
+        g = free_gap_acceleration(t, y, p, k)
+        if not abs(g) > 0.0:
+            return True, t, y  # no accumulation point: the law acts at the contact
+        psi, v, w = psi_of(y), dpsi_of(y), rotor_speed(y)
+        hr, hs = h_ratio(psi, k), h_slope(psi, k)
+        hc, a_psi = h_curvature(psi, k), accelerations(t, y, p)[1]
+        approach = side * (w + hr * v)
+        tail = 2.0 * r * abs(approach) / (abs(g) * (1.0 - r))
+        t1, y1 = settle(t, y, data, p, tail)
+        h1 = h_ratio(psi_of(y1), k)
+        slope1 = h_slope(psi_of(y1), k)
+        for j in range(d):
+            c = (tangent[DT, j], tangent[DPHI, j], tangent[DW, j], tangent[DPSI, j],
+                 tangent[DDPSI, j])
+            d_approach = side * (c[DW] + hr * c[DDPSI] + hs * v * c[DPSI])
+            da_phi, da_psi = differential(y, p, c)
+            dg = (da_phi + hr * da_psi + (hs * a_psi + hc * v * v) * c[DPSI]
+                  + 2.0 * hs * v * c[DDPSI])
+            d_tail = 2.0 * r / (1.0 - r) * (math.copysign(1.0, approach) * d_approach / abs(g)
+                                            - abs(approach) * math.copysign(1.0, g) * dg
+                                            / (g * g))
+            dphi = c[DPHI] + c[DW] * tail + w * d_tail
+            dpsi = -dphi / h1
+            tangent[DT, j] = c[DT] + d_tail
+            tangent[DPHI, j] = dphi
+            tangent[DPSI, j] = dpsi
+            tangent[DDPSI, j] = -c[DW] / h1 + w * slope1 / (h1 * h1) * dpsi
+        return True, t1, y1
+
     @njit(**INLINE_OPTIONS)
     def flight_data(data):
         """The faces around the striker after a contact: behind it if it bounced off the
@@ -513,4 +650,5 @@ def lab_window(model):
     return Contact(model, flight, slide, first, key, from_key, jacobian, normal_speed,
                    striker_speed, normal_acceleration, gap_rate_after, pressed, settle,
                    _never, flight_data, 2, SECTION_MIN_FLIGHT, LAB_HORIZON, False,
-                   event_gradient, jacobian_slope, model.driven, edge_distance)
+                   event_gradient, jacobian_slope, slide_tangent, accumulation_tangent,
+                   edge_distance)
