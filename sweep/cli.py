@@ -81,7 +81,7 @@ def cli():
 def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
     """Run a sweep; with no SPEC, the built-in default (the crank-rocker design atlas)."""
     from sweep import runner, spec, store
-    from sweep.metadata import status_counts
+    from sweep.metadata import file_status_counts
 
     if spec_file is None:
         sweep_spec = spec.parse(_example_text(DEFAULT_EXAMPLE), source="default spec")
@@ -107,7 +107,8 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
                             scheduler=scheduler, progress=not quiet, resume=resume,
                             force=force)
     elapsed = time.perf_counter() - started
-    written = _open_atlas(str(target))
+    # opened (with xarray) only for what reads it: the boundaries and the chart
+    written = _open_atlas(str(target)) if bounds_path or chart_path else None
     bounds = None
     if bounds_path is not None:
         from sweep.boundaries import refine
@@ -121,7 +122,7 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
         design_chart(written, c.x, c.y, c.color, chart_path, at=c.at_values(),
                      boundaries=bounds, overlay=c.overlay)
     if not quiet:
-        counts = status_counts(written)
+        counts = file_status_counts(target)
         click.echo(f"atlas: {target.resolve()}")
         if bounds_path is not None:
             click.echo(f"boundaries: {bounds_path.resolve()} ({bounds.sizes['crossing']:,} "
@@ -133,7 +134,8 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
                        "done")
         click.echo(f"{sweep_spec.size} points in {elapsed:.2f} s; status: "
                    + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
-    written.close()
+    if written is not None:
+        written.close()
 
 
 def bounds_target(atlas: Path) -> Path:

@@ -167,19 +167,62 @@ class Plan:
         return out
 
 
-def build(sweep: Sweep):
-    """The atlas as a lazy (dask-backed) xarray Dataset; nothing is computed here."""
-    import dask.array as da
-    import xarray as xr
+class _Definition:
+    """One variable of a Template: dimensions, placeholder values, attributes, encoding."""
 
+    def __init__(self, dims, values):
+        self.dims = (dims,) if isinstance(dims, str) else tuple(dims)
+        self.values = np.asarray(values)
+        self.dtype, self.shape = self.values.dtype, self.values.shape
+        self.attrs, self.encoding = {}, {}
+
+
+class Template:
+    """What the atlas writer needs of an atlas (the names, dimensions, dtypes, attributes
+    and encodings of ``build``'s Dataset, in the same order) without xarray's data model:
+    building an xarray Dataset imports dask to check for dask arrays (0.3 s of a small
+    run). ``metadata.annotate`` fills it as it fills a Dataset."""
+
+    def __init__(self, coords: dict, data: dict):
+        self.coords = {name: _Definition(*item) for name, item in coords.items()}
+        self.data_vars = {name: _Definition(*item) for name, item in data.items()}
+        self.sizes = {dim: n for v in self.coords.values() for dim, n in zip(v.dims, v.shape)}
+        self.attrs = {}
+
+    def __getitem__(self, name):
+        return self.coords[name] if name in self.coords else self.data_vars[name]
+
+
+def build(sweep: Sweep, lazy: bool = True):
+    """The atlas as a lazy (dask-backed) xarray Dataset; nothing is computed here. With
+    ``lazy=False``, a Template: the same variables, dimensions, attributes and encodings
+    over placeholder values (zero-strided, no memory), what the atlas writer needs,
+    without importing xarray's data model or dask."""
     plan = Plan(sweep)
-    stacked = da.map_blocks(lambda block_info=None: run_block(
-        sweep, block_info[None]["array-location"][1:]), chunks=((plan.rows,),) + plan.chunks,
-        dtype=np.float64, meta=np.empty((0,) * (len(plan.shape) + 1)), name="kernel")
     n_out, n_ang = plan.n_out, plan.angles.shape[0]
     dims = [axis.name for axis in sweep.axes]
     coords = {axis.name: (axis.name, axis.values) for axis in sweep.axes}
+    if plan.n_prof:
+        pdim = sweep.mechanism.profile_dim.name
+        coords[pdim] = (pdim, plan.angles)
     data = {}
+    if not lazy:
+        def placeholder(dtype, shape):
+            return np.broadcast_to(np.zeros((), dtype), shape)
+        for name in sweep.scalar_outputs:
+            flag = sweep.mechanism.output(name).is_flag
+            data[name] = (dims, placeholder(np.int8 if flag else np.float64, plan.shape))
+        data["status"] = (dims, placeholder(np.int8, plan.shape))
+        for name in sweep.profile_outputs:
+            data[name] = (dims + [pdim], placeholder(np.float64, plan.shape + (n_ang,)))
+        return annotate(Template(coords, data), sweep, plan.chunk_shape)
+    import dask.array as da
+    import xarray as xr
+
+    stacked = da.map_blocks(lambda block_info=None: run_block(
+        sweep, block_info[None]["array-location"][1:]),
+        chunks=((plan.rows,),) + plan.chunks, dtype=np.float64,
+        meta=np.empty((0,) * (len(plan.shape) + 1)), name="kernel")
     for k, name in enumerate(sweep.scalar_outputs):
         o = sweep.mechanism.output(name)
         rows = stacked[k]
@@ -187,11 +230,8 @@ def build(sweep: Sweep):
             rows = rows.map_blocks(flag_codes, o, dtype=np.int8)
         data[name] = (dims, rows)
     data["status"] = (dims, stacked[n_out].astype(np.int8))
-    if plan.n_prof:
-        pdim = sweep.mechanism.profile_dim.name
-        coords[pdim] = (pdim, plan.angles)
-        for k, name in enumerate(sweep.profile_outputs):
-            start = n_out + 1 + k * n_ang
-            data[name] = (dims + [pdim], da.moveaxis(stacked[start:start + n_ang], 0, -1))
+    for k, name in enumerate(sweep.profile_outputs):
+        start = n_out + 1 + k * n_ang
+        data[name] = (dims + [pdim], da.moveaxis(stacked[start:start + n_ang], 0, -1))
     ds = xr.Dataset(data, coords=coords)
     return annotate(ds, sweep, plan.chunk_shape)

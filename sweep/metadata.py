@@ -134,10 +134,15 @@ def history_line(argv: list[str] | None = None) -> str:
     return f"{now}: {args}"
 
 
-def status_counts(ds: xr.Dataset) -> dict[str, int]:
-    status = ds["status"]
-    values = [int(v) for v in np.atleast_1d(status.attrs["flag_values"])]
-    meanings = status.attrs["flag_meanings"].split()
-    counts = np.bincount(np.asarray(status.values, dtype=np.int64).ravel(),
-                         minlength=max(CODES.values()) + 1)
-    return {m: int(counts[v]) for v, m in zip(values, meanings)}
+def file_status_counts(path) -> dict[str, int]:
+    """How many points of an atlas file carry each status meaning, read with netCDF4 alone
+    (a run's summary needs no xarray)."""
+    import netCDF4
+
+    with netCDF4.Dataset(path) as nc:
+        status = nc["status"]
+        status.set_auto_mask(False)
+        values = [int(v) for v in np.atleast_1d(status.flag_values)]
+        counts = np.bincount(np.asarray(status[...], dtype=np.int64).ravel(),
+                             minlength=max(CODES.values()) + 1)
+        return {m: int(counts[v]) for v, m in zip(values, status.flag_meanings.split())}

@@ -122,7 +122,7 @@ def write_atlas(store: BlockStore, plan, path: Path, history: str) -> None:
 
     from sweep.engine import build
 
-    template = build(plan.sweep)
+    template = build(plan.sweep, lazy=False)
     template.attrs["history"] = history
     with atomic(path) as tmp, netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
         _define(nc, template)
