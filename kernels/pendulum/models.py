@@ -358,14 +358,33 @@ def paper_amplitude(v, k, xi):
 @njit(**KERNEL_OPTIONS)
 def paper_half_period(v, k, xi, amplitude):
     """Flight time from impact to impact, tau1 = 2 int_0^A dpsi / sqrt(u) (P-O3), with
-    psi = A sin s removing the end singularity, by 96-point Gauss-Legendre."""
+    psi = A sin s removing the end singularity, by 96-point Gauss-Legendre.
+
+    u is written from the turning point, u = xi expm1(g(X_A) - g(X)) (u(A) = 0 defines
+    X_A), with X_A - X = -4k sin((A + psi)/2) sin((A - psi)/2) and (A - psi)/2 =
+    A sin^2(pi/4 - s/2): near the turning point the plain u(psi) = (v^2 + xi) e^(...) - xi
+    is a difference of nearly equal numbers, and it cost tau1 about 1e-11 of its value
+    (against mpmath at 40 digits); this form has no such difference."""
     total = 0.0
     half = 0.25 * math.pi
     for j in range(_GL_X.shape[0]):
         s = half * (_GL_X[j] + 1.0)
-        u = paper_u(amplitude * math.sin(s), v, k, xi)
+        u = _paper_u_from_turning_point(amplitude, s, k, xi)
         total += _GL_W[j] * amplitude * math.cos(s) / math.sqrt(max(u, 1e-300))
     return 2.0 * half * total
+
+
+@njit(**INLINE_OPTIONS)
+def _paper_u_from_turning_point(amplitude, s, k, xi):
+    """u at psi = A sin s, from the turning point A (see paper_half_period):
+    g(X_A) - g(X) = -d X/(1 + xi X) - (y - log1p(y))/xi^2, d = X_A - X, y = xi d/(1 + xi X),
+    each term free of cancellation."""
+    r = math.sin(0.25 * math.pi - 0.5 * s)
+    gap = amplitude * r * r  # (A - psi)/2
+    x = k * k + 1.0 + 2.0 * k * math.cos(amplitude - 2.0 * gap)
+    d = -4.0 * k * math.sin(amplitude - gap) * math.sin(gap)
+    y = xi * d / (1.0 + xi * x)
+    return xi * math.expm1(-d * x / (1.0 + xi * x) - (y - math.log1p(y)) / (xi * xi))
 
 
 @njit(**KERNEL_OPTIONS)
