@@ -59,12 +59,6 @@ def _generated(name: str, args: str, body: list[str], namespace: dict):
     return njit(**INLINE_OPTIONS)(namespace[name])
 
 
-def _as_tuple(n):
-    """``as_state(a)``: the first n entries of an array as a tuple (a model's state)."""
-    return _generated("as_state", "a", [
-        "return (" + ", ".join(f"a[{i}]" for i in range(n)) + ",)"], {})
-
-
 def make_variational(model, n):
     """``flow_derivative(t0, y0, t1, p, settings) -> (reached, Y)``: the derivative Y (row-
     major n x n) of the flow of ``model`` (a Field: a model, or a slide's constrained
@@ -171,24 +165,39 @@ def _quadratic_leading(b, c):
     return math.sqrt(c), math.acos(max(-1.0, min(1.0, -0.5 * b / math.sqrt(c))))
 
 
+def _matrix_vector(n):
+    """``product(m, v)``: the row-major n x n matrix m times the n-tuple v, as a tuple,
+    straight-line (no array on the heap: it runs at every stage of a variational step)."""
+    rows = [" + ".join(f"m[{i * n + k}] * v[{k}]" for k in range(n)) for i in range(n)]
+    return _generated("product", "m, v", ["return (" + ", ".join(rows) + ",)"], {})
+
+
+def make_event_carry(n):
+    """``carry(m, dy0, dt0, f1, grad, rate) -> (dy, dt1)``: a perturbation (dt0, dy0) of a
+    flight's start carried to its end event, for the flow derivative m (row-major n x n):
+    at fixed time m dy0 - f1 dt0 (the flow started dt0 later), then the event moves by
+    dt1 = -(grad . dy)/rate (the saltation of the event time; rate = grad . f1) and the
+    state with it. One rule for free flights and slides."""
+    rows = [" + ".join([f"-f1[{i}] * dt0"] + [f"m[{i * n + k}] * dy0[{k}]" for k in range(n)])
+            for i in range(n)]
+    moved = " + ".join(f"grad[{i}] * fixed[{i}]" for i in range(n))
+    return _generated("carry", "m, dy0, dt0, f1, grad, rate", [
+        "fixed = (" + ", ".join(rows) + ",)",
+        f"dt1 = -({moved}) / rate",
+        "return (" + ", ".join(f"fixed[{i}] + f1[{i}] * dt1" for i in range(n)) + ",), dt1"],
+        {})
+
+
 def make_acceleration_differential(model, n):
     """``differential(y, p, c) -> (d phi1'', d psi'')``: how the free accelerations change
     along a perturbation c in coordinates (dt, dphi1, dphi1', dpsi, dpsi'), by the model's
     Jacobian (the flow is autonomous: dt does not enter)."""
     state, coordinates, jacobian = model.tangent_state, model.tangent_coordinates, model.jacobian
-    as_state = _as_tuple(n)
+    product = _matrix_vector(n)
 
     @njit(**INNER_OPTIONS)
     def differential(y, p, c):
-        m = jacobian(y, p)
-        dy = state(c)
-        out = np.empty(n)
-        for i in range(n):
-            acc = 0.0
-            for k in range(n):
-                acc += m[i * n + k] * dy[k]
-            out[i] = acc
-        q = coordinates(0.0, as_state(out))
+        q = coordinates(0.0, product(jacobian(y, p), state(c)))
         return q[DW], q[DDPSI]
 
     return differential
@@ -204,7 +213,7 @@ def make_tracker(c, n):
     gradient, jacobian, jacobian_slope = c.event_gradient, c.jacobian, c.jacobian_slope
     flow_derivative = make_variational(model, n)
     slide_tangent, accumulation_tangent = c.slide_tangent, c.accumulation_tangent
-    as_state = _as_tuple(n)
+    carry = make_event_carry(n)
 
     @njit(**INNER_OPTIONS)
     def start(t, y, data, basis):
@@ -244,21 +253,12 @@ def make_tracker(c, n):
         g_phi, g_psi, g_dpsi = gradient(t1, y1, data1)
         angle, rate, accel = monitor(t1, y1, f1)
         g_dot = g_phi * rotor_speed(y1) + g_psi * rate + g_dpsi * accel
-        nn = n
+        grad = state((0.0, g_phi, 0.0, g_psi, g_dpsi))  # in the model's state
         for j in range(d):
             dy0 = state((tangent[0, j], tangent[1, j], tangent[2, j], tangent[3, j],
                          tangent[4, j]))
-            dy = np.empty(nn)
-            for i in range(nn):
-                acc = -f1[i] * tangent[DT, j]
-                for k in range(nn):
-                    acc += m[i * nn + k] * dy0[k]
-                dy[i] = acc
-            q = coordinates(0.0, as_state(dy))
-            dt1 = -(g_phi * q[DPHI] + g_psi * q[DPSI] + g_dpsi * q[DDPSI]) / g_dot
-            for i in range(nn):
-                dy[i] += f1[i] * dt1
-            out = coordinates(dt1, as_state(dy))
+            dy, dt1 = carry(m, dy0, tangent[DT, j], f1, grad, g_dot)
+            out = coordinates(dt1, dy)
             for i in range(5):
                 tangent[i, j] = out[i]
         return math.isfinite(g_dot) and g_dot != 0.0

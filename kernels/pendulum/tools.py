@@ -36,7 +36,8 @@ from kernels.impact.flight import Flight, make_flight
 from kernels.impact.impact_map import radical_inverse
 from kernels.impact.outcomes import FLIGHT_EVENT, NO_COST
 from kernels.impact.tangent import (DDPSI, DPHI, DPSI, DT, DW, Field,
-                                    make_acceleration_differential, make_variational)
+                                    make_acceleration_differential, make_event_carry,
+                                    make_variational)
 from kernels.impact.tuples import relative_scales
 
 TWO_PI = 2.0 * math.pi
@@ -112,6 +113,27 @@ def _fixed_exit_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
 @njit(**INLINE_OPTIONS)
 def _settle_in_place(tangent, d, t, y, data, p, r):
     return True, t, y  # the accumulated law acts where the contact is
+
+
+def _gap_acceleration_change(model):
+    """``change(y, p, k, a_psi, c) -> (d G'', d psi'')``: how the free normal acceleration
+    of the blade, G'' = phi1'' + h psi'' + h' psi'^2, and the free psi'' change along a
+    perturbation c in coordinates (dt, dphi1, dphi1', dpsi, dpsi'), at a state whose free
+    psi'' is a_psi: the model's Jacobian and h's first two derivatives. The one gradient
+    of the pressing, for the chatter's accumulation point and the slide's release."""
+    differential = make_acceleration_differential(model, 2 if model.driven else 4)
+    psi_of, dpsi_of = model.psi, model.dpsi
+
+    @njit(**INLINE_OPTIONS)
+    def change(y, p, k, a_psi, c):
+        psi, v = psi_of(y), dpsi_of(y)
+        hs = h_slope(psi, k)
+        da_phi, da_psi = differential(y, p, c)
+        return (da_phi + h_ratio(psi, k) * da_psi
+                + (hs * a_psi + h_curvature(psi, k) * v * v) * c[DPSI]
+                + 2.0 * hs * v * c[DDPSI]), da_psi
+
+    return change
 
 
 def stop_flight(model):
@@ -284,7 +306,7 @@ def _kinematic_slide(model, free_gap_acceleration):
     return slide, _fixed_exit_tangent
 
 
-def _constrained_slide(model):
+def _constrained_slide(model, gap_change):
     """The slide of a rotor of finite inertia: a flight of the constrained system (psi,
     psi') on the face G = level, the rotor angle phi1 = level - beta(psi) and speed -h psi';
     psi'' keeps G'' = 0 with the contact force along J = (1, h), until the pressing
@@ -293,7 +315,7 @@ def _constrained_slide(model):
     compose, accelerations, response = model.compose, model.accelerations, model.response
     response_slope, psi_of, dpsi_of = model.response_slope, model.psi, model.dpsi
     rotor_speed = model.rotor_speed
-    differential = make_acceleration_differential(model, 4)
+    carry = make_event_carry(2)
 
     @njit(**INLINE_OPTIONS)
     def on_face(t, s, sp):
@@ -301,9 +323,10 @@ def _constrained_slide(model):
         psi, dpsi = s
         return compose(t, level - beta(psi, k), -h_ratio(psi, k) * dpsi, psi, dpsi)
 
-    @njit(**INNER_OPTIONS)
-    def slide_state(t, s, sp):
-        """(psi'' on the face, the free G'' that the contact force cancels)."""
+    @njit(**INLINE_OPTIONS)
+    def face_terms(t, s, sp):
+        """On the face at s: the state y, h, the free accelerations, M^-1 J^T, the free
+        G'' that the contact force cancels, and psi'' on the face."""
         p, k = sp[0], sp[2]
         psi, dpsi = s
         tt, y = on_face(t, s, sp)
@@ -311,7 +334,13 @@ def _constrained_slide(model):
         a_phi, a_psi = accelerations(tt, y, p)
         g2 = a_phi + hr * a_psi + h_slope(psi, k) * dpsi * dpsi
         x_phi, x_psi = response(y, 1.0, hr, p)
-        return a_psi - x_psi * g2 / (x_phi + hr * x_psi), g2
+        return y, hr, a_psi, x_phi, x_psi, g2, a_psi - x_psi * g2 / (x_phi + hr * x_psi)
+
+    @njit(**INNER_OPTIONS)
+    def slide_state(t, s, sp):
+        """(psi'' on the face, the free G'' that the contact force cancels)."""
+        terms = face_terms(t, s, sp)
+        return terms[6], terms[5]
 
     @njit(**INLINE_OPTIONS)
     def slide_rhs(s, sp):
@@ -362,15 +391,12 @@ def _constrained_slide(model):
         beta(psi), phi1' = -h psi'), the model's Jacobian and d(M^-1 J^T)/dpsi."""
         p, k = sp[0], sp[2]
         psi, v = s
-        acc, g2 = slide_state(0.0, s, sp)
-        tt, y = on_face(0.0, s, sp)
-        hr, hs = h_ratio(psi, k), h_slope(psi, k)
-        a_phi, a_psi = accelerations(tt, y, p)
-        dphi_psi, dpsi_psi = differential(y, p, (0.0, -hr, -hs * v, 1.0, 0.0))
-        dphi_v, dpsi_v = differential(y, p, (0.0, 0.0, -hr, 0.0, 1.0))
-        g2_psi = dphi_psi + hr * dpsi_psi + hs * a_psi + h_curvature(psi, k) * v * v
-        g2_v = dphi_v + hr * dpsi_v + 2.0 * hs * v
-        x_phi, x_psi = response(y, 1.0, hr, p)
+        y, hr, a_psi, x_phi, x_psi, g2, acc = face_terms(0.0, s, sp)
+        hs = h_slope(psi, k)
+        # along the face: d/dpsi moves phi1 by -h and phi1' by -h' psi'; d/dpsi' moves
+        # phi1' by -h
+        g2_psi, dpsi_psi = gap_change(y, p, k, a_psi, (0.0, -hr, -hs * v, 1.0, 0.0))
+        g2_v, dpsi_v = gap_change(y, p, k, a_psi, (0.0, 0.0, -hr, 0.0, 1.0))
         dx_phi, dx_psi = response_slope(y, 1.0, hr, 0.0, hs, p)
         jx = x_phi + hr * x_psi
         djx = dx_phi + hr * dx_psi + hs * x_psi
@@ -408,13 +434,9 @@ def _constrained_slide(model):
         e_dot = e_psi * f1[0] + e_v * f1[1]
         h1, slope1 = h_ratio(s1[0], k), h_slope(s1[0], k)
         for j in range(d):
-            dt0, dpsi0 = tangent[DT, j], tangent[DPSI, j]
+            dpsi0 = tangent[DPSI, j]
             dv0 = -tangent[DW, j] / h0 + w * slope0 / (h0 * h0) * dpsi0
-            a = m[0] * dpsi0 + m[1] * dv0 - f1[0] * dt0
-            b = m[2] * dpsi0 + m[3] * dv0 - f1[1] * dt0
-            dt1 = -(e_psi * a + e_v * b) / e_dot
-            a += f1[0] * dt1
-            b += f1[1] * dt1
+            (a, b), dt1 = carry(m, (dpsi0, dv0), tangent[DT, j], f1, (e_psi, e_v), e_dot)
             tangent[DT, j] = dt1
             tangent[DPHI, j] = -h1 * a
             tangent[DW, j] = -slope1 * s1[1] * a - h1 * b
@@ -498,10 +520,11 @@ def lab_window(model):
                       (lower2 + level, window2, k2, level2, side2), fl.amplitude, fl.peak,
                       fl.cost)
 
+    gap_change = _gap_acceleration_change(model)
     if model.driven:
         slide, slide_tangent = _kinematic_slide(model, free_gap_acceleration)
     else:
-        slide, slide_tangent = _constrained_slide(model)
+        slide, slide_tangent = _constrained_slide(model, gap_change)
 
     @njit(**INLINE_OPTIONS)
     def first(p, data, start):
@@ -586,8 +609,6 @@ def lab_window(model):
         psi = face_psi(level - phi1, psi_of(y), k)
         return compose(t + dt, phi1, w, psi, -w / h_ratio(psi, k))
 
-    differential = make_acceleration_differential(model, 2 if model.driven else 4)
-
     @njit(**INNER_OPTIONS)
     def accumulation_tangent(tangent, d, t, y, data, p, r):
         """The columns from a contact (t, y) whose chatter accumulates to its accumulation
@@ -601,7 +622,7 @@ def lab_window(model):
             return True, t, y  # no accumulation point: the law acts at the contact
         psi, v, w = psi_of(y), dpsi_of(y), rotor_speed(y)
         hr, hs = h_ratio(psi, k), h_slope(psi, k)
-        hc, a_psi = h_curvature(psi, k), accelerations(t, y, p)[1]
+        a_psi = accelerations(t, y, p)[1]
         approach = side * (w + hr * v)
         tail = 2.0 * r * abs(approach) / (abs(g) * (1.0 - r))
         t1, y1 = settle(t, y, data, p, tail)
@@ -611,9 +632,7 @@ def lab_window(model):
             c = (tangent[DT, j], tangent[DPHI, j], tangent[DW, j], tangent[DPSI, j],
                  tangent[DDPSI, j])
             d_approach = side * (c[DW] + hr * c[DDPSI] + hs * v * c[DPSI])
-            da_phi, da_psi = differential(y, p, c)
-            dg = (da_phi + hr * da_psi + (hs * a_psi + hc * v * v) * c[DPSI]
-                  + 2.0 * hs * v * c[DDPSI])
+            dg = gap_change(y, p, k, a_psi, c)[0]
             d_tail = 2.0 * r / (1.0 - r) * (math.copysign(1.0, approach) * d_approach / abs(g)
                                             - abs(approach) * math.copysign(1.0, g) * dg
                                             / (g * g))
