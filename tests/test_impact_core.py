@@ -17,7 +17,7 @@ from kernels import INLINE_OPTIONS
 from kernels.impact import System
 from kernels.impact.events import ILLINOIS_ITERATIONS, make_illinois
 from kernels.impact.flight import make_flight
-from kernels.impact.impact_map import aitken, classify_period
+from kernels.impact.impact_map import aitken, classify_period, fixed_point_jump
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW)
 from kernels.impact.tuples import relative_scales
@@ -241,3 +241,47 @@ def test_period_classification_and_aitken():
     # a geometric sequence x_j = 1 + 0.5^j: Aitken gives its limit from three terms
     assert aitken(2.0, 1.5, 1.25) == pytest.approx(1.0, rel=1e-15)
     assert aitken(1.0, 2.0, 4.0) == 4.0  # diverging: no extrapolation
+
+
+def test_the_transient_jump_lands_on_the_fixed_point_of_an_affine_map():
+    """fixed_point_jump on random 2-D affine maps x -> M x + b (the fixed point by numpy's
+    solve, independently): with eigenvalues inside 0.95, real or a complex pair, or one of
+    them zero (d0 and d1 parallel), four iterates land on the fixed point to round-off
+    (1e-9 of the distance), unless the fixed point lies over 20 last differences away (the
+    modes cancel in the last difference: no jump); with an eigenvalue outside 0.95, no jump
+    (or one within 20 last differences)."""
+    rng = np.random.default_rng(77)
+    landed = refused = 0
+    for trial in range(300):
+        kind = trial % 4
+        if kind == 0:  # real eigenvalues
+            mu = np.diag(rng.uniform(-0.9, 0.9, 2))
+        elif kind == 1:  # a complex pair of modulus < 0.9
+            r, a = rng.uniform(0.1, 0.9), rng.uniform(0.2, 3.0)
+            mu = r * np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+        elif kind == 2:  # one mode left
+            mu = np.diag([rng.uniform(-0.9, 0.9), 0.0])
+        else:  # one eigenvalue outside 0.95
+            mu = np.diag([rng.uniform(0.96, 1.5) * rng.choice([-1, 1]),
+                          rng.uniform(-0.9, 0.9)])
+        basis = rng.normal(size=(2, 2))
+        m = basis @ mu @ np.linalg.inv(basis)
+        b = rng.normal(size=2)
+        fixed = np.linalg.solve(np.eye(2) - m, b)
+        history = np.empty((4, 2))
+        history[0] = fixed + rng.normal(size=2)
+        for j in range(1, 4):
+            history[j] = m @ history[j - 1] + b
+        jump, x = fixed_point_jump(history, 4)
+        away = np.max(np.abs(history[0] - fixed))
+        if kind == 3:
+            assert not jump or np.max(np.abs(np.array(x) - history[3])) <= 20 * np.max(
+                np.abs(history[3] - history[2]))
+            refused += not jump
+            continue
+        if not jump:  # only where the fixed point is over 20 last differences away
+            assert np.hypot(*(history[3] - fixed)) > 20 * np.hypot(*(history[3] - history[2]))
+            continue
+        assert np.max(np.abs(np.array(x) - fixed)) <= 1e-9 * away, trial
+        landed += 1
+    assert landed >= 200 and refused >= 60

@@ -18,8 +18,12 @@ max_impacts, tol, log) -> Steady`` runs a sequence:
    to ``tol`` (period p <= MAX_PERIOD);
 4. on a smooth map (``jump_early``: an affine map of reversible flights) Aitken's
    extrapolation from the start and two sections jumps to the fixed point, checked by the
-   next section; otherwise, once period 1 is found, Aitken on the last three sections
-   removes the geometric tail, checked by the cycle's residual (H13);
+   next section; on another smooth map with a 2-D section (the rotor model on its stop)
+   the transient jumps to the fixed point of the affine map through its last four
+   sections (fixed_point_jump), again after four more, and the three sections after a
+   jump confirm it (12.1 flights a steady state became 9.2); once period 1 is found,
+   Aitken on the last three sections removes the geometric tail, checked by the cycle's
+   residual (H13);
 5. the steady cycle is run once more with ``refine`` (turning points and peaks polished),
    which gives the outputs;
 6. the budget ``max_impacts``: without a cycle, not periodic where the map has stopped
@@ -135,6 +139,50 @@ def aitken(x0, x1, x2):
     if d1 == 0.0 or d2 == d1 or not abs(d2 / d1) < 0.95:
         return x2
     return x2 - d2 * d2 / (d2 - d1)
+
+
+@njit(**KERNEL_OPTIONS)
+def fixed_point_jump(history, count):
+    """The fixed point of the 2-D affine map through the last four sections x0..x3 (rows
+    count-4 .. count-1), by minimal polynomial extrapolation: with d_j = x_{j+1} - x_j,
+    c0 d0 + c1 d1 = -d2 gives the map's characteristic polynomial l^2 + c1 l + c0, and the
+    fixed point x* = x2 + (c0 (x0 - x2) + c1 (x1 - x2)) / (1 + c1 + c0), exact for an
+    affine map (a smooth map near its fixed point is one to second order). Where d0 and d1
+    are parallel (one mode left) the ratio q of d2 to d1 gives x* = x3 + q d2 / (1 - q).
+    Returns (jump, x*): no jump unless both eigenvalues lie inside |l| < 0.95 and the jump
+    is at most 20 times the last difference (a map that is not yet near affine)."""
+    a, b, c, d = (history[count - 4], history[count - 3], history[count - 2],
+                  history[count - 1])
+    d0x, d0y = b[0] - a[0], b[1] - a[1]
+    d1x, d1y = c[0] - b[0], c[1] - b[1]
+    d2x, d2y = d[0] - c[0], d[1] - c[1]
+    last = math.hypot(d2x, d2y)
+    det = d0x * d1y - d1x * d0y
+    if abs(det) > 1e-6 * math.hypot(d0x, d0y) * math.hypot(d1x, d1y):
+        c0 = (-d2x * d1y + d1x * d2y) / det
+        c1 = (-d0x * d2y + d2x * d0y) / det
+        disc = c1 * c1 - 4.0 * c0
+        if disc < 0.0:
+            largest = math.sqrt(c0)  # a complex pair: |l|^2 = c0
+        else:
+            root = math.sqrt(disc)
+            largest = 0.5 * max(abs(-c1 + root), abs(-c1 - root))
+        if not largest < 0.95:
+            return False, (d[0], d[1])
+        s = 1.0 + c1 + c0
+        x = (c[0] + (c0 * (a[0] - c[0]) + c1 * (b[0] - c[0])) / s,
+             c[1] + (c0 * (a[1] - c[1]) + c1 * (b[1] - c[1])) / s)
+    else:
+        norm = d1x * d1x + d1y * d1y
+        if norm == 0.0:
+            return False, (d[0], d[1])
+        q = (d1x * d2x + d1y * d2y) / norm
+        if not abs(q) < 0.95:
+            return False, (d[0], d[1])
+        x = (d[0] + q * d2x / (1.0 - q), d[1] + q * d2y / (1.0 - q))
+    if not math.hypot(x[0] - d[0], x[1] - d[1]) <= 20.0 * last:
+        return False, (d[0], d[1])
+    return True, x
 
 
 def make_impact_map(c, jump_early, stability=False):
@@ -290,6 +338,7 @@ def make_impact_map(c, jump_early, stability=False):
         period = 0
         cost = NO_COST
         jumped = False
+        jumped_at = 1  # the count at the last transient jump (its rows: count - 1 on)
         speculative = Steady(SEQUENCE_MAX_STEPS, 0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0,
                              NO_COST, NO_MARGINS, key)
         while count <= max_impacts:
@@ -300,12 +349,25 @@ def make_impact_map(c, jump_early, stability=False):
             log[slot, 0], log[slot, 1] = rotor_angle(t, y) % (2.0 * math.pi), psi_of(y)
             count += 1
             period = classify_period(history, count, tol, MAX_PERIOD)
-            if period > 0:
+            # right after a transient jump, one section more: Aitken at the end needs three
+            # sections of the map's own (a jumped state's section repeats it only to tol)
+            if period > 0 and not (jumped_at > 1 and count < jumped_at + 2):
                 break
             # an affine map of slope r = 0 is constant: its first section is the cycle
             constant = jump_early and r == 0.0
             # bool(): a literal would compile every function below twice (True, False)
             refine = bool(constant)
+            if not jump_early and smooth and len(key) == 2 and count - jumped_at >= 3:
+                # a smooth 2-D map: jump to the fixed point of the affine map through the
+                # last four sections; the sections after it confirm, or carry on from there
+                # (and four more allow another jump)
+                jump, x = fixed_point_jump(history, count)
+                if jump:
+                    t, y = from_key(x, t, y, data, p)
+                    key = key_of(t, y, data, p)
+                    for i in range(len(key)):
+                        history[count - 1, i] = key[i]
+                    jumped_at = count
             if jump_early and count == 3:
                 # the start and two sections fix an affine map: jump to its fixed point by
                 # Aitken's delta-squared; the next section, refined, is expected to confirm

@@ -1,0 +1,83 @@
+"""Large atlases end to end: the wall time of a whole `sweep run` (in this process, after
+a run of the same spec with 2 points per axis has filled the numba cache), the part of it
+spent computing blocks, and the share outside the kernels (spec, cache load, block store,
+netCDF write, summary; the imports are paid before, by the warm-up).
+
+Run: .venv/bin/python benchmarks/bench_atlas.py [SPEC ...]
+     (default: the 10^6-point rotor-model sweep and the 10^4-point blade sweep in
+     benchmarks/specs/; writes benchmarks/results/atlas.json)
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import re
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+DEFAULT = ["rotary_pendulum_rotor_1e6.toml", "rotary_pendulum_blade_1e4.toml"]
+
+
+def timed_run(spec: Path, out: Path) -> dict:
+    from sweep import cli, engine, runner
+
+    spans = {"kernel_cpu_s": 0.0, "compute_s": 0.0}
+    run_block, compute = engine.run_block, runner._compute_local
+
+    def block(*args, **kwargs):
+        t = time.perf_counter()
+        try:
+            return run_block(*args, **kwargs)
+        finally:
+            spans["kernel_cpu_s"] += time.perf_counter() - t
+
+    def compute_local(*args, **kwargs):
+        t = time.perf_counter()
+        try:
+            return compute(*args, **kwargs)
+        finally:
+            spans["compute_s"] += time.perf_counter() - t
+
+    engine.run_block, runner._compute_local = block, compute_local
+    started = time.perf_counter()
+    try:
+        cli.main(["run", str(spec), "-o", str(out), "--force", "-q"])
+    except SystemExit as done:  # the CLI ends a run with its exit code
+        if done.code:
+            raise
+    finally:
+        engine.run_block, runner._compute_local = run_block, compute
+    wall = time.perf_counter() - started
+    return {"wall_s": round(wall, 2), "compute_s": round(spans["compute_s"], 2),
+            "kernel_cpu_s": round(spans["kernel_cpu_s"], 2),
+            "outside_kernels": round(1.0 - spans["compute_s"] / wall, 3)}
+
+
+def main() -> None:
+    specs = sys.argv[1:] or [str(HERE / "specs" / name) for name in DEFAULT]
+    results = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for spec in map(Path, specs):
+            small = Path(tmp) / spec.name
+            small.write_text(re.sub(r"num = \d+", "num = 2", spec.read_text()))
+            timed_run(small, Path(tmp) / "small.nc")  # compiles, or loads the cache
+            r = timed_run(spec, Path(tmp) / "atlas.nc")
+            results[spec.name] = r
+            print(f"{spec.name}: {r['wall_s']:.1f} s whole run, {r['compute_s']:.1f} s "
+                  f"computing blocks ({r['kernel_cpu_s']:.1f} s of kernel on "
+                  f"{os.cpu_count()} cores), {100 * r['outside_kernels']:.1f} % outside",
+                  flush=True)
+    record = {"what": __doc__.strip().splitlines()[0], "machine": platform.processor()
+              or platform.machine(), "cpus": os.cpu_count(), "results": results}
+    (HERE / "results" / "atlas.json").write_text(json.dumps(record, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
