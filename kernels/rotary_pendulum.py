@@ -303,9 +303,9 @@ def rows_repeat(words, first, inverse):
 def distinct_rows(keys):
     """(distinct rows, index of each row's distinct row): a 1-D unique on row hashes of the
     bit patterns (-0.0 counts as 0.0), checked row by row, bit for bit (np.unique(axis=0)
-    sorts structured rows and cost 85 % of a closed-form block; the check in numpy, with its
-    temporaries, 15 %); a hash collision, or NaNs with other bits, falls back to the exact
-    sort."""
+    sorts structured rows and cost 85 % of a closed-form block; the same check in numpy,
+    with its temporaries, took this function from 9.5 to 20 ms per 10^5 rows); a hash
+    collision, or NaNs with other bits, falls back to the exact sort."""
     words = np.ascontiguousarray(keys + 0.0).view(np.uint64)
     _, first, inverse = np.unique(row_hashes(words), return_index=True, return_inverse=True)
     if rows_repeat(words, first, inverse.ravel()):

@@ -437,7 +437,7 @@ def paper_peak_acceleration(v, k, xi, amplitude):
     at the turning point A, or where the slope (_paper_peak_slope, positive at psi = 0)
     turns negative: its sign at 32 points, and each change by Illinois to 1e-15 A. A root
     in closed form, so the peak is exact to round-off; a golden-section search on the value
-    (70 evaluations with an exponential in each) cost 6.9 us of a design's 16.7 (1.1 now)."""
+    (70 evaluations with an exponential in each) cost 6.9 us of a design's 16.7 (0.8 now)."""
     data, slope = (v, k, xi), (k, xi)
     best = _paper_flight_acceleration(amplitude, data)
     n = 32
