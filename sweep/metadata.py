@@ -26,7 +26,7 @@ CONVENTIONS = "CF-1.10"
 def package_versions() -> dict[str, str]:
     out = {"python": platform.python_version()}
     for name in ("impact-sweep", "numpy", "numba", "llvmlite", "xarray", "dask", "netCDF4",
-                 "pydantic", "click"):
+                 "h5py", "isal", "pydantic", "click"):
         try:
             out[name] = metadata.version(name)
         except metadata.PackageNotFoundError:

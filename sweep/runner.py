@@ -58,7 +58,7 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
             _compute_local(sweep, todo, save, sweep.run.workers or os.cpu_count() or 1)
     finally:
         bar.close()
-    write_atlas(store, plan, Path(path), history or history_line())
+    write_atlas(store, plan, Path(path), history or history_line(), sweep.run.workers)
     store.discard()
     return {"blocks": plan.n_blocks, "reused": len(store.done)}
 

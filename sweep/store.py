@@ -8,10 +8,13 @@ temporary name and renamed, so a file at the target is always a whole atlas.
 
 from __future__ import annotations
 
+import collections
+import concurrent.futures as cf
 import contextlib
 import json
 import os
 import shutil
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -116,20 +119,101 @@ class BlockStore:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
-def write_atlas(store: BlockStore, plan, path: Path, history: str) -> None:
-    """Write the atlas from the block store under a temporary name, then rename."""
+def write_atlas(store: BlockStore, plan, path: Path, history: str,
+                workers: int | None = None) -> None:
+    """Write the atlas from the block store under a temporary name, then rename.
+
+    netCDF4 defines the file (dimensions, coordinates, attributes, the variables' chunking
+    and filters); the blocks, which are aligned with the netCDF chunks, are then encoded
+    by the file's own filter pipeline (shuffle, zlib) on ``workers`` threads and stored as
+    whole chunks (HDF5 direct chunk writes). netCDF4 itself compresses on one thread after
+    all compute: at 10^6 points x 16 outputs that single pass was 0.8 s of a 2.9 s run."""
+    import h5py
     import netCDF4
 
     from sweep.engine import build
 
     template = build(plan.sweep, lazy=False)
     template.attrs["history"] = history
-    with atomic(path) as tmp, netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
-        _define(nc, template)
+    with atomic(path) as tmp:
+        with netCDF4.Dataset(tmp, "w", format="NETCDF4") as nc:
+            _define(nc, template)
+        with h5py.File(tmp, "r+") as h5:
+            _write_blocks(h5, store, plan, workers or os.cpu_count() or 1)
+
+
+#: HDF5's filter identifiers (H5Zpublic.h): the ones netCDF4 puts in an atlas's pipeline
+_DEFLATE, _SHUFFLE = 1, 2
+#: deflate levels compressed by ISA-L (its levels stop at 3), above by zlib
+ISAL_LEVEL_MAX = 3
+
+
+def _deflate(data: bytes, level: int) -> bytes:
+    """A zlib stream of ``data`` at deflate effort ``level`` (1-9), which any netCDF/HDF5
+    reader inflates: by ISA-L for levels 1-3 (on an atlas's shuffled doubles its level 1
+    ran at 1.1 GB/s against zlib's 75 MB/s at level 1, for a file 3 % larger), by zlib
+    above, where a user asked for the smallest file."""
+    if level <= ISAL_LEVEL_MAX:
+        from isal import isal_zlib
+
+        return isal_zlib.compress(data, level)
+    return zlib.compress(data, level)
+
+
+def _chunk_encoder(dataset):
+    """``encode(values) -> bytes``: a block as one whole chunk of ``dataset``, through the
+    dataset's filter pipeline in its order (the writer defines shuffle and deflate only)."""
+    plist = dataset.id.get_create_plist()
+    steps = []
+    for i in range(plist.get_nfilters()):
+        code, _, options, _ = plist.get_filter(i)
+        if code not in (_SHUFFLE, _DEFLATE):
+            raise ValueError(f"{dataset.name}: HDF5 filter {code} is not written here")
+        steps.append((code, dataset.dtype.itemsize if code == _SHUFFLE else int(options[0])))
+    dtype, shape = dataset.dtype, dataset.chunks
+
+    def encode(values):
+        chunk = np.ascontiguousarray(values, dtype=dtype)
+        if chunk.shape != shape:  # an edge chunk is stored whole; the rest is never read
+            whole = np.zeros(shape, dtype)
+            whole[tuple(slice(0, n) for n in chunk.shape)] = chunk
+            chunk = whole
+        data = chunk.view(np.uint8)
+        for code, option in steps:
+            if code == _SHUFFLE:  # byte j of every element together
+                data = data.reshape(-1, option).T.copy()
+            else:
+                data = _deflate(data.tobytes(), option)
+        return data if isinstance(data, bytes) else data.tobytes()
+
+    return encode
+
+
+def _write_blocks(h5, store: BlockStore, plan, workers: int) -> None:
+    """Every block of the store into the defined file as whole chunks (blocks are aligned
+    with the chunks: Plan cuts the grid by the chunk shape). Deflate releases the GIL, so
+    the chunks of a few blocks are encoded on ``workers`` threads while this one loads the
+    next block and writes the finished chunks in order."""
+    encoders: dict = {}
+    pending: collections.deque = collections.deque()
+
+    def write_oldest():
+        dataset, offset, encoded = pending.popleft()
+        dataset.id.write_direct_chunk(offset, encoded.result())
+
+    with cf.ThreadPoolExecutor(max_workers=workers) as pool:
         for index, location in plan.locations():
-            region = tuple(slice(a, b) for a, b in location)
+            starts = tuple(a for a, _ in location)
             for name, values in plan.split(store.load(index)).items():
-                nc[name][region] = values
+                dataset = h5[name]
+                if name not in encoders:
+                    encoders[name] = _chunk_encoder(dataset)
+                offset = starts + (0,) * (values.ndim - len(starts))
+                pending.append((dataset, offset, pool.submit(encoders[name], values)))
+            while len(pending) > 2 * workers * len(encoders):
+                write_oldest()
+        while pending:
+            write_oldest()
 
 
 def _define(nc, ds) -> None:
@@ -161,8 +245,3 @@ def _define(nc, ds) -> None:
             chunksizes=enc.get("chunksizes"),
             fill_value=False if fill is None else fill)
         var.setncatts(dict(item.attrs))
-        # blocks are written whole and aligned with the netCDF chunks, so the cache only
-        # needs a couple of chunks; netCDF-C's default (up to 64 MiB per variable) made the
-        # peak memory grow with the grid (1.46 GB at 10^7 points)
-        chunk_bytes = int(np.prod(enc.get("chunksizes") or item.shape)) * item.dtype.itemsize
-        var.set_var_chunk_cache(size=2 * chunk_bytes + 1024, nelems=11, preemption=1.0)

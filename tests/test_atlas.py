@@ -316,3 +316,32 @@ def test_the_writers_template_defines_what_the_lazy_dataset_does(example):
         for key, value in b.attrs.items():
             assert np.array_equal(np.asarray(a.attrs[key]), np.asarray(value)), (name, key)
     assert np.array_equal(template["status"].values, np.zeros(template["status"].shape))
+
+
+@pytest.mark.parametrize("level", [0, 1, 6])
+@pytest.mark.parametrize("text, chunk", [
+    (SPEC, 37),  # 4-D grid, flags, edge blocks smaller than a chunk
+    ('mechanism = "linkage_forces"\n[grid]\nomega1 = [5.0, 20.0, 30.0]\n'
+     'tilt = [0.0, 0.5]\n[method]\nprofile_points = 72\n', 2)])  # profiles in the chunks
+def test_chunks_written_whole_decode_to_the_values_and_name_their_filters(tmp_path, text,
+                                                                          chunk, level):
+    """The writer encodes each block as a whole HDF5 chunk itself (shuffle, then deflate
+    by ISA-L up to level 3, zlib above; edge chunks padded) on several threads, instead of
+    letting netCDF4 compress on one. netCDF-C, another HDF5 build, must read back exactly
+    the values that the in-memory dataset (no writer at all) holds, and the filters and
+    level the spec asked for."""
+    import netCDF4
+
+    s = spec.parse(text + f"[run]\ncompress_level = {level}\n")
+    target = tmp_path / "a.nc"
+    runner.run_sweep(s, target, chunk=chunk, workers=2, progress=False, history="test")
+    expected = engine.build(s.with_run(chunk=chunk)).compute()
+    with netCDF4.Dataset(target) as nc:
+        nc.set_auto_mask(False)
+        for name in expected.data_vars:
+            var = nc[name]
+            assert np.array_equal(var[...], expected[name].values, equal_nan=True), name
+            filters = var.filters()
+            assert filters["zlib"] == (level > 0) and filters["complevel"] == level, name
+            assert filters["shuffle"] == (level > 0 and name != "status"), name
+            assert var.chunking() != "contiguous" and var.chunking()[0] <= chunk, name
