@@ -599,3 +599,79 @@ def test_rotor_on_the_blade_chatters_like_the_rigid_model_in_the_limit():
     assert gaps[1] < gaps[0] / 30 and gaps[1] < 1e-4
     status, out = steady(model="rotor", rotor_inertia_ratio=1e8, motor_slope=1e8, **chatter)
     assert status == "ok" and out["regime"] == REG["chatter"]  # accumulates in every cycle
+
+
+@pytest.mark.parametrize("model", ["paper", "rigid"])
+def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(model):
+    """The coast of a driven pendulum's free flight past the lab blade (tools._swing_coast)
+    skips whole swings in closed form. At 60 random designs and swings (k, xi or kappa,
+    the blade's reach, the swing's amplitude above it, where the faces stand), from just
+    after a passage of psi = 0: SciPy's DOP853 (rtol 1e-12) over the skipped time returns
+    to the same state (whole swings: tau1 from the model's closed form), meets no face
+    with |psi| <= window there (no contact skipped), and the faces the coast says were
+    passed are those around the striker at the end. Coasting must also happen (in more
+    than a quarter of the draws), and never inside the reach (amplitude <= window)."""
+    from numba import njit
+
+    from kernels.pendulum import models as pm
+    from kernels.pendulum.tools import _swing_coast
+
+    def beta(psi, k):  # the contact point's polar angle ahead of the arm
+        return math.atan2(math.sin(psi), k + math.cos(psi))
+
+    m = pm.PAPER if model == "paper" else pm.RIGID
+    coast = _swing_coast(m)
+
+    @njit
+    def call(t_cross, t, y, f, data, p, time_left):
+        return coast(t_cross, 2, 0.1, t, y, f, data, p, time_left, (np.nan, np.nan))
+
+    rng = np.random.default_rng(5 if model == "paper" else 6)
+    coasted = passed = 0
+    for j in range(60):
+        k, c = rng.uniform(0.4, 3.0), rng.uniform(0.5, 5.0)
+        p = (k, c)
+        window = rng.uniform(0.05, 0.6)
+        amp = rng.uniform(1.2 * window, 0.9 * math.pi) if rng.random() < 0.9 else 0.8 * window
+
+        def rhs(t, z):
+            if model == "paper":
+                return [z[1], pm.paper_acceleration(z[0], z[1], k, c)]
+            return [z[1], -k * c * math.sin(z[0])]
+        # launch speed at psi = 0 for this amplitude: the turning point's rise
+        if model == "paper":
+            v = math.sqrt(c * math.expm1(pm.rise_from_launch(
+                4.0 * k * math.sin(0.5 * amp) ** 2, (1.0 + k) ** 2, c)))
+        else:
+            v = 2.0 * math.sqrt(k * c) * math.sin(0.5 * amp)
+        t_cross, lag = rng.uniform(0.0, 2.0 * math.pi), rng.uniform(0.001, 0.2)
+        z = solve_ivp(rhs, (0.0, lag), [0.0, v], method="DOP853", rtol=1e-13,
+                      atol=1e-14).y[:, -1]
+        t = t_cross + lag
+        g = t + beta(z[0], k)
+        # the faces stand at face + 2 pi n; a third of the draws put one just ahead, met
+        # within the passage the flight is in (the coast must not skip the rest of it)
+        face = g + 1e-3 if j % 3 == 0 else rng.uniform(0.0, 2.0 * math.pi)
+        lower = face + 2.0 * math.pi * math.floor((g - face) / (2.0 * math.pi))
+        data = (lower, window, k, 0.0, 1.0)
+        skip, new, _ = call(t_cross, t, (z[0], z[1]), tuple(rhs(t, z)), data, p,
+                            200.0 * math.pi)
+        if amp <= window:
+            assert skip == 0.0
+            continue
+        if skip == 0.0:
+            assert new == data
+            continue
+        coasted += 1
+
+        def faces(s, w):
+            return math.sin(0.5 * (s + beta(w[0], k) - face))
+        sol = solve_ivp(rhs, (t, t + skip), z, method="DOP853", rtol=1e-12, atol=1e-13,
+                        events=faces)
+        assert np.allclose(sol.y[:, -1], z, rtol=0.0, atol=1e-7), (k, c, window, amp)
+        met = sol.y_events[0].reshape(-1, 2)
+        assert np.all(np.abs(met[:, 0]) > window), (k, c, window, amp)
+        passed += len(met)
+        g_end = t + skip + beta(z[0], k)
+        assert new[0] <= g_end < new[0] + 2.0 * math.pi and new[1:3] == (window, k)
+    assert coasted > 15 and passed > 50

@@ -23,6 +23,9 @@ The contract:
    another (a pass by the tool) updates the system data and the flight goes on.
 6. ``monitor(t, y, f) -> (angle, rate, acceleration)``: the quantity whose amplitude and
    peak acceleration a flight reports (turning points and peaks polished with ``refine``).
+   Where the free motion is periodic, the system's ``coast`` may skip whole periods that
+   no event can end, from the second zero crossing of the monitored angle on (the
+   amplitude and peak are then those of one whole swing already flown).
 7. A flight ends in one of outcomes.FLIGHT_*, with its cost as a Counters record
    (accepted and rejected steps, events). A step whose error estimate is not finite is
    rejected; an RK4 step (no estimate) into a state that is not finite ends the flight.
@@ -34,12 +37,30 @@ The contract:
    extrapolation where the map is smooth.
 """
 
+import math
 from collections import namedtuple
 
+from numba import njit
+
+from kernels import INLINE_OPTIONS
+
+
+@njit(**INLINE_OPTIONS)
+def no_coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo):
+    return 0.0, data, memo
+
+
 #: what flies: the vector field, error scales, events (values, rates, directions, what each
-#: does), the start gap for the first-step cap, and the monitored quantity
+#: does), the start gap for the first-step cap, the monitored quantity, and where the free
+#: motion is periodic between events, a coast past whole periods that no event can end
+#: (``coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo) -> (skip, data,
+#: memo)``, called after a step in which the monitored angle crossed zero, the crossing's
+#: time estimated as t_cross, the crossings counted from the flight's start; skip: the time
+#: added to t, a whole number of periods, after which y and f are the same; memo: two
+#: floats the coast keeps between calls of one flight, NaN at its start)
 System = namedtuple("System", ["rhs", "scales", "event_values", "event_rates", "directions",
-                               "on_event", "start_gap", "monitor"])
+                               "on_event", "start_gap", "monitor", "coast"],
+                    defaults=(no_coast,))
 
 #: what happens at a contact, for the impact map (impact_map.py). ``model``: the flying
 #: body's functions the map needs (namedtuple fields response(y, J_phi, J_psi, p) = M^-1 J^T

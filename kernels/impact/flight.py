@@ -51,6 +51,7 @@ def make_flight(system):
     rhs, monitor = system.rhs, system.monitor
     values, rates, on_event, start_gap = (system.event_values, system.event_rates,
                                           system.on_event, system.start_gap)
+    coast = system.coast
     step = make_stepper(rhs, system.scales)
     locate = make_locator(values, rates, system.directions, step)
 
@@ -151,6 +152,7 @@ def make_flight(system):
         best, best_value = (y, f, y, f, 0.0, t, 0.0, 0.0), abs(accel)
         after_reject = False
         err_prev = 1.0
+        crossings, memo = 0, (math.nan, math.nan)  # zero crossings of the angle, coast's memo
         while steps + rejected < settings.max_steps:
             if t - t0 > settings.horizon:
                 return Flight(FLIGHT_HORIZON, -1, t, y, f, data, amplitude, peak,
@@ -190,6 +192,7 @@ def make_flight(system):
                                   Counters(steps, rejected, events))
                 # passed (the striker goes by the tool): on from the event, state as it is
                 t, y, f, data = t + s, ys, fs, new_data
+                angle = angle_e
                 continue
             angle1, rate1, accel1 = monitor(t + h, y1, f1)
             if not (math.isfinite(angle1) and math.isfinite(rate1)):  # RK4 has no error
@@ -210,7 +213,13 @@ def make_flight(system):
                     spacing = h / (PEAK_SAMPLES + 1)
                     best = (y, f, y1, f1, h, t, h - spacing, h + spacing)
                     best_value = abs(accel1)
-            t, y, f = t + h, y1, f1
+            if (angle < 0.0) != (angle1 < 0.0):
+                crossings += 1
+                t_cross = t + h * angle / (angle - angle1)  # the chord's zero
+                skip, data, memo = coast(t_cross, crossings, h, t + h, y1, f1, data, p,
+                                         t0 + settings.horizon - (t + h), memo)
+                t += skip
+            t, y, f, angle = t + h, y1, f1, angle1
             h, err_prev = accepted_step_size(method, h, settings.dt, err, after_reject,
                                              err_prev)
             after_reject = False

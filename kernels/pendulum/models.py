@@ -33,7 +33,7 @@ MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR = 0, 1, 2
 Model = namedtuple("Model", [
     "rhs", "scales", "monitor", "accelerations", "response", "rotor_angle", "rotor_speed",
     "psi", "dpsi", "compose", "critical_speed", "shift", "driven", "jacobian",
-    "response_slope", "tangent_state", "tangent_coordinates"])
+    "response_slope", "tangent_state", "tangent_coordinates", "swing"])
 
 #: the half period's Gauss-Legendre panels: 24 nodes each, halving towards the turning point
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(24)
@@ -139,7 +139,7 @@ def driven_response(y, j_phi, j_psi, p):
     return 0.0, 1.0
 
 
-def driven_model(rhs, critical_speed, jacobian):
+def driven_model(rhs, critical_speed, jacobian, swing):
     @njit(**INLINE_OPTIONS)
     def accelerations(t, y, p):
         return 0.0, rhs(y, p)[1]
@@ -147,7 +147,8 @@ def driven_model(rhs, critical_speed, jacobian):
     return Model(rhs, relative_scales, driven_monitor, accelerations, driven_response,
                  driven_rotor_angle, driven_rotor_speed, driven_psi, driven_dpsi,
                  driven_compose, critical_speed, driven_shift, True, jacobian,
-                 driven_response_slope, driven_tangent_state, driven_tangent_coordinates)
+                 driven_response_slope, driven_tangent_state, driven_tangent_coordinates,
+                 swing)
 
 
 # ---------------------------------------------------------------- rotor of finite inertia
@@ -293,10 +294,16 @@ def no_critical_speed(p):
     return math.inf  # no closed form: escape is an event of the flight
 
 
+@njit(**INLINE_OPTIONS)
+def no_swing(y, p, window):
+    return math.nan, math.inf  # the rotor's speed changes: no free swing repeats
+
+
 ROTOR = Model(rotor_rhs, rotor_scales, rotor_monitor, rotor_model_accelerations,
               rotor_response, rotor_rotor_angle, rotor_rotor_speed, rotor_psi, rotor_dpsi,
               rotor_compose, no_critical_speed, rotor_shift, False, rotor_jacobian,
-              rotor_response_slope, rotor_tangent_state, rotor_tangent_coordinates)
+              rotor_response_slope, rotor_tangent_state, rotor_tangent_coordinates,
+              no_swing)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -309,51 +316,123 @@ def kinetic_energy(y, p):
 
 # ---------------------------------------------------------------- closed forms
 
+#: 1/(2j + 3): the series of log1p_excess
+_EXCESS_SERIES = np.array([1.0 / (2 * j + 3) for j in range(18)])
+
+
 @njit(**KERNEL_OPTIONS)
-def _g(x, xi):
-    """g(X) = ln(1 + xi X)/xi^2 - X/xi: the first integral is (psi'^2 + xi) exp(-g) = const."""
-    return math.log1p(xi * x) / (xi * xi) - x / xi
+def log1p_excess(z):
+    """z - log1p(z) for z > -1, to a few ulp: for |z| < 1/2 as 2 w^2 (1/(1 - w) - w T(w^2)),
+    w = z/(2 + z), T(u) = sum u^j/(2j + 3) (from log1p(z) = 2 atanh(w)), with no difference
+    of nearly equal numbers; the plain difference lost 2/|z| ulp (at z = 1e-6, 1e-10 of
+    the value)."""
+    if abs(z) < 0.5:
+        w = z / (2.0 + z)
+        u = w * w
+        t = 0.0
+        for j in range(_EXCESS_SERIES.shape[0] - 1, -1, -1):
+            t = t * u + _EXCESS_SERIES[j]
+        return 2.0 * u * (1.0 / (1.0 - w) - w * t)
+    return z - math.log1p(z)
+
+
+# The first integral of [RP]'s equation is (psi'^2 + xi) exp(g(X)) = const with
+# g(X) = ln(1 + xi X)/xi^2 - X/xi (P3), X = k^2 + 1 + 2k cos psi, decreasing and concave
+# (g' = -X/(1 + xi X)). g itself is a difference of two terms of size X/xi that cancel to
+# about -X^2/2 at small xi; its rises between two points are written without it.
+
+@njit(**KERNEL_OPTIONS)
+def rise_from_launch(d, x0, xi):
+    """g(x0 - d) - g(x0) = d x0/q - log1p_excess(-xi d/q)/xi^2, q = 1 + xi x0: the rise
+    of g from the launch point x0 = (1 + k)^2 (psi = 0) by d, increasing and concave in d."""
+    q = 1.0 + xi * x0
+    return d * x0 / q - log1p_excess(-xi * d / q) / (xi * xi)
+
+
+@njit(**KERNEL_OPTIONS)
+def rise_to_saddle(e, xs, xi):
+    """g(xs) - g(xs + e) = e xs/q + log1p_excess(xi e/q)/xi^2, q = 1 + xi xs: the rise of
+    g to the saddle xs = (1 - k)^2 (psi = pi) from e above it, increasing and convex in e."""
+    q = 1.0 + xi * xs
+    return e * xs / q + log1p_excess(xi * e / q) / (xi * xi)
 
 
 @njit(**KERNEL_OPTIONS)
 def paper_critical_speed(k, xi):
-    """v_crit (P4): launched from psi = 0 faster than this, the pendulum goes over the top."""
-    return math.sqrt(xi * math.expm1(_g((k - 1.0) ** 2, xi) - _g((1.0 + k) ** 2, xi)))
+    """v_crit (P4): launched from psi = 0 faster than this, the pendulum goes over the top:
+    v_crit^2 = xi expm1(g(xs) - g(x0)), the rise over the whole swing, x0 - xs = 4k."""
+    return math.sqrt(xi * math.expm1(rise_to_saddle(4.0 * k, (1.0 - k) ** 2, xi)))
 
 
 @njit(**KERNEL_OPTIONS)
 def paper_u(psi, v, k, xi):
-    """psi'^2 as a function of psi on the flight launched from psi = 0 with speed v (P3)."""
-    x0 = (1.0 + k) ** 2
-    x = k * k + 1.0 + 2.0 * k * math.cos(psi)
-    return (v * v + xi) * math.exp(_g(x0, xi) - _g(x, xi)) - xi
+    """psi'^2 as a function of psi on the flight launched from psi = 0 with speed v (P3):
+    (v^2 + xi) exp(-(g(X) - g(x0))) - xi, X = x0 - 4k sin^2(psi/2)."""
+    s = math.sin(0.5 * psi)
+    return (v * v + xi) * math.exp(-rise_from_launch(4.0 * k * s * s, (1.0 + k) ** 2, xi)) - xi
 
 
 @njit(**KERNEL_OPTIONS)
 def paper_amplitude(v, k, xi):
-    """Amplitude A (P-O2): the root of u(A) = 0 in (0, pi), by safeguarded Newton on
-    X_A = k^2 + 1 + 2k cos A. NaN if v >= v_crit (escape)."""
-    if v >= paper_critical_speed(k, xi):
+    """Amplitude A (P-O2): where u(A) = 0, i.e. g rises by L = log1p(v^2/xi) from the
+    launch point. NaN if v >= v_crit (escape).
+
+    Solved for the distance d = x0 - X_A = 4k sin^2(A/2) from the launch point while
+    A <= pi/2, else for the distance e = X_A - xs = 4k cos^2(A/2) from the saddle (the
+    rise left to it is g(xs) - g(x0) - L): each the smaller of the two, so that A comes
+    from an arcsine of at most sqrt(1/2) (acos of the cosine lost up to 1e-11 at moderate
+    speeds, and 3x the input's own sensitivity near the separatrix). Newton on each from
+    the root of its quadratic bound, on the side from which it converges monotonically
+    (the rise from the launch is concave, the one to the saddle convex): 2.3 iterations on
+    random designs (6.3 from the launch point, 37 for a safeguarded Newton from the middle
+    of the bracket, which overshot and bisected)."""
+    x0, xs = (1.0 + k) ** 2, (1.0 - k) ** 2
+    full = rise_to_saddle(4.0 * k, xs, xi)
+    if v >= math.sqrt(xi * math.expm1(full)):  # = paper_critical_speed(k, xi)
         return math.nan
-    x0 = (1.0 + k) ** 2
-    target = math.log(v * v + xi) - math.log(xi) + _g(x0, xi)  # = g(X_A), g decreasing
-    lo, hi = (k - 1.0) ** 2, x0
-    x = 0.5 * (lo + hi)
-    for _ in range(200):
-        f = _g(x, xi) - target
-        if f > 0.0:
-            lo = x
-        else:
-            hi = x
-        slope = 1.0 / (xi * (1.0 + xi * x)) - 1.0 / xi
-        step = x - f / slope
-        x_new = step if lo < step < hi else 0.5 * (lo + hi)
-        if abs(x_new - x) <= 1e-16 * x0:
-            x = x_new
+    rise = math.log1p(v * v / xi)
+    if rise <= rise_from_launch(2.0 * k, x0, xi):
+        q = 1.0 + xi * x0
+        a, b = x0 / q, 0.5 / (q * q)  # rise <= a d - b d^2: its root is left of d
+        disc = a * a - 4.0 * b * rise
+        d = 2.0 * rise / (a + math.sqrt(disc)) if disc > 0.0 else 0.0
+        for _ in range(100):
+            f = rise_from_launch(d, x0, xi) - rise
+            if not f < 0.0:  # concave: Newton from the left never passes the root
+                break
+            x = x0 - d
+            step = -f * (1.0 + xi * x) / x  # the rise's slope is X/(1 + xi X)
+            d += step
+            if step <= 1e-16 * d:
+                break
+        return 2.0 * math.asin(math.sqrt(min(d / (4.0 * k), 1.0)))
+    left = full - rise
+    q = 1.0 + xi * xs
+    a, b = xs / q, 0.5 / (q * q)  # left >= a e + b e^2: its root is left of e
+    e = 2.0 * left / (a + math.sqrt(a * a + 4.0 * b * left))
+    for j in range(100):
+        x = xs + e
+        step = -(rise_to_saddle(e, xs, xi) - left) * (1.0 + xi * x) / x
+        if j > 0 and not step < 0.0:  # convex: after one step right, only steps left
             break
-        x = x_new
-    c = (x - k * k - 1.0) / (2.0 * k)
-    return math.acos(min(1.0, max(-1.0, c)))
+        e += step
+        if abs(step) <= 1e-16 * e:
+            break
+    return math.pi - 2.0 * math.asin(math.sqrt(min(max(e, 0.0) / (4.0 * k), 1.0)))
+
+
+def _half_t(g, x, last):
+    """t/2 at Gauss node x of the half period's panel t in [g, 2g], or [0, 2g] if it is the
+    last (s = pi/2 - t ascends with x)."""
+    return 0.5 * g * ((1.0 - x) if last else (1.5 - 0.5 * x))
+
+
+_panel_half_t = njit(**INLINE_OPTIONS)(_half_t)
+#: t/2 and its sine and cosine at every node of the first 40 panels, not last [0] and last
+#: [1] (the panels stop after ~25 even at the separatrix flag's 64 ulp)
+_PANEL_HALF_T = np.array([[[_half_t(0.25 * math.pi * 2.0 ** -j, x, last) for x in _GL_X]
+                           for j in range(40)] for last in (False, True)])
+_PANEL_SIN, _PANEL_COS = np.sin(_PANEL_HALF_T), np.cos(_PANEL_HALF_T)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -364,48 +443,55 @@ def paper_half_period(v, k, xi, amplitude):
 
     u is written from the turning point, u = xi expm1(g(X_A) - g(X)) (u(A) = 0 defines
     X_A), with X_A - X = -4k sin((A + psi)/2) sin((A - psi)/2) and (A - psi)/2 =
-    A sin^2(pi/4 - s/2): near the turning point the plain u(psi) = (v^2 + xi) e^(...) - xi
-    is a difference of nearly equal numbers, and it cost tau1 about 1e-11 of its value
-    (against mpmath at 40 digits); this form has no such difference.
+    A sin^2(t/2), t = pi/2 - s: near the turning point the plain u(psi) = (v^2 + xi)
+    e^(...) - xi is a difference of nearly equal numbers, and it cost tau1 about 1e-11 of
+    its value (against mpmath at 40 digits); this form has no such difference.
 
-    Near the separatrix (A -> pi) the integrand has a near-singularity at s = pi/2 of width
-    w = sqrt(2 (pi - A)/A) in s (where psi = A sin s would reach the saddle at pi): one rule
-    on [0, pi/2] converges ever slower (96 nodes were off by 6e-10 at 1e-9 of v_crit).
-    Panels [pi/2 - 2^-j pi/2, pi/2 - 2^-(j+1) pi/2] each lie one length away from it, so 24
-    nodes per panel reach round-off (16 did not at xi ~ 0.03); the panels stop once the last
-    is narrower than w: 2 panels (48 nodes, against 96 before) for most flights, about 25
-    within 64 ulp of v_crit, where the integrand's rounding near the saddle leaves ~1e-12."""
-    half = 0.5 * math.pi
+    Near the separatrix (A -> pi) the integrand has a near-singularity at t = 0 of width
+    w = sqrt(2 (pi - A)/A) (where psi = A sin s would reach the saddle at pi): one rule on
+    [0, pi/2] converges ever slower (96 nodes were off by 6e-10 at 1e-9 of v_crit). Panels
+    t in [g, 2g], g = 2^-j pi/4, each lie one length away from it, so 24 nodes per panel
+    reach round-off (16 did not at xi ~ 0.03); the panels stop once the last, [0, 2g], is
+    narrower than w: 2 panels (48 nodes) for most flights, about 25 within 64 ulp of v_crit.
+
+    The nodes are placed by their distance t/2 from the turning point, tabulated with its
+    sine and cosine (_PANEL_HALF_T): placed by s, sin(pi/4 - s/2) lost the digits of t next
+    to the saddle, and tau1 was off by up to 2e-11 within 1e-12 of v_crit (now 2e-15).
+    sin((A + psi)/2) and cos(psi) follow from sin(A), cos(A) and the node's sin, cos of
+    (A - psi)/2 by the angle sums: two sines per node instead of five, 1.35-1.6x."""
     width = math.sqrt(2.0 * max(math.pi - amplitude, 0.0) / amplitude)
-    total = 0.0
-    lo, gap = 0.0, 0.5 * half  # the panel [lo, half - gap]
+    sin_a, cos_a = math.sin(amplitude), math.cos(amplitude)
+    total, g, j = 0.0, 0.25 * math.pi, 0
     while True:
-        last = not gap > width or gap < 1e-300  # NaN width (no amplitude): one panel
-        hi = half if last else half - gap
-        centre, radius = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        last = not g > width or g < 1e-300  # NaN width (no amplitude): one panel
         panel = 0.0
-        for j in range(_GL_X.shape[0]):
-            s = centre + radius * _GL_X[j]
-            u = _paper_u_from_turning_point(amplitude, s, k, xi)
-            panel += _GL_W[j] * math.cos(s) / math.sqrt(max(u, 1e-300))
-        total += radius * panel
+        for i in range(_GL_X.shape[0]):
+            if j < _PANEL_HALF_T.shape[1]:
+                r, q = _PANEL_SIN[int(last), j, i], _PANEL_COS[int(last), j, i]
+            else:
+                half_t = _panel_half_t(g, _GL_X[i], last)
+                r, q = math.sin(half_t), math.cos(half_t)
+            u = _paper_u_from_turning_point(amplitude, sin_a, cos_a, r, k, xi)
+            panel += _GL_W[i] * 2.0 * r * q / math.sqrt(max(u, 1e-300))  # cos s = sin t
+        total += (g if last else 0.5 * g) * panel
         if last:
             break
-        lo, gap = hi, 0.5 * gap
+        g, j = 0.5 * g, j + 1
     return 2.0 * amplitude * total
 
 
 @njit(**INLINE_OPTIONS)
-def _paper_u_from_turning_point(amplitude, s, k, xi):
-    """u at psi = A sin s, from the turning point A (see paper_half_period):
-    g(X_A) - g(X) = -d X/(1 + xi X) - (y - log1p(y))/xi^2, d = X_A - X, y = xi d/(1 + xi X),
+def _paper_u_from_turning_point(amplitude, sin_a, cos_a, r, k, xi):
+    """u at the node whose (A - psi)/2 = A r^2 (r = sin(t/2); see paper_half_period):
+    g(X_A) - g(X) = -d X/(1 + xi X) - log1p_excess(y)/xi^2, d = X_A - X, y = xi d/(1 + xi X),
     each term free of cancellation."""
-    r = math.sin(0.25 * math.pi - 0.5 * s)
     gap = amplitude * r * r  # (A - psi)/2
-    x = k * k + 1.0 + 2.0 * k * math.cos(amplitude - 2.0 * gap)
-    d = -4.0 * k * math.sin(amplitude - gap) * math.sin(gap)
+    sin_g, cos_g = math.sin(gap), math.cos(gap)
+    cos_psi = cos_a * (1.0 - 2.0 * sin_g * sin_g) + sin_a * 2.0 * sin_g * cos_g
+    x = k * k + 1.0 + 2.0 * k * cos_psi
+    d = -4.0 * k * (sin_a * cos_g - cos_a * sin_g) * sin_g
     y = xi * d / (1.0 + xi * x)
-    return xi * math.expm1(-d * x / (1.0 + xi * x) - (y - math.log1p(y)) / (xi * xi))
+    return xi * math.expm1(-d * x / (1.0 + xi * x) - log1p_excess(y) / (xi * xi))
 
 
 @njit(**KERNEL_OPTIONS)
@@ -502,8 +588,42 @@ def rigid_critical(p):
     return 2.0 * math.sqrt(p[0] * p[1])
 
 
-PAPER = driven_model(paper_rhs, paper_critical, paper_jacobian)
-RIGID = driven_model(rigid_rhs, rigid_critical, rigid_jacobian)
+@njit(**INNER_OPTIONS)
+def paper_swing(y, p, window):
+    """The free swing through the state y at constant rotor speed, in closed form: (tau1,
+    the flight time between two passages of psi = 0; an upper bound on the time from
+    psi = 0 to |psi| = window, the speed there being the least on the way: inf if the
+    swing stays inside the window); tau1 NaN if the pendulum goes over the top. The speed
+    at psi = 0 from the first integral: v^2 + xi = (psi'^2 + xi) e^(g(X) - g(x0))."""
+    k, xi = p
+    s = math.sin(0.5 * y[0])
+    v2 = (y[1] * y[1] + xi) * math.exp(rise_from_launch(4.0 * k * s * s, (1.0 + k) ** 2,
+                                                        xi)) - xi
+    v = math.sqrt(max(v2, 0.0))
+    amplitude = paper_amplitude(v, k, xi)
+    if not amplitude < math.pi:
+        return math.nan, math.inf
+    u = paper_u(window, v, k, xi)
+    return (paper_half_period(v, k, xi, amplitude),
+            window / math.sqrt(u) if u > 0.0 else math.inf)
+
+
+@njit(**INNER_OPTIONS)
+def rigid_swing(y, p, window):
+    """paper_swing of the rigid pendulum psi'' = -Omega^2 sin psi (rigid_flight, P-O8), the
+    speed at psi = 0 from v^2 = psi'^2 + 4 Omega^2 sin^2(psi/2)."""
+    omega2 = p[0] * p[1]
+    s, sw = math.sin(0.5 * y[0]), math.sin(0.5 * window)
+    v2 = y[1] * y[1] + 4.0 * omega2 * s * s
+    tau1 = rigid_flight(math.sqrt(v2), omega2)[1]
+    if not tau1 < math.inf:
+        return math.nan, math.inf
+    u = v2 - 4.0 * omega2 * sw * sw
+    return tau1, window / math.sqrt(u) if u > 0.0 else math.inf
+
+
+PAPER = driven_model(paper_rhs, paper_critical, paper_jacobian, paper_swing)
+RIGID = driven_model(rigid_rhs, rigid_critical, rigid_jacobian, rigid_swing)
 
 
 @njit(**KERNEL_OPTIONS)

@@ -30,7 +30,7 @@ from numba import njit
 
 from kernels import INNER_OPTIONS, INLINE_OPTIONS
 from kernels.extrema import peak_search
-from kernels.impact import Contact, System
+from kernels.impact import Contact, System, no_coast
 from kernels.impact.events import make_illinois
 from kernels.impact.flight import Flight, make_flight
 from kernels.impact.impact_map import radical_inverse
@@ -447,6 +447,56 @@ def _constrained_slide(model, gap_change):
     return slide, slide_tangent
 
 
+#: rotor radians kept clear of a blade contact around each passage of psi = 0 when coasting,
+#: beyond the passage's own reach and the step that holds the crossing (whose time is the
+#: chord's zero, inside that step)
+COAST_MARGIN = 0.01
+
+
+def _swing_coast(model):
+    """The coast of a driven pendulum's free flight past the blade (System.coast): at
+    constant rotor speed the free swing repeats exactly every 2 tau1 (the model's swing, in
+    closed form), and a contact needs |psi| <= window, i.e. a time within t_w (the swing's
+    bound) of a passage of psi = 0, at a rotor angle within beta(window) of a face. From
+    the second passage on, the last passage and those ahead (every tau1) are checked
+    against the faces; the whole swings before the first that could meet one are skipped,
+    up to the flight's horizon, and the faces passed meanwhile move on as the events would
+    have moved them. What stays is integrated as before; a striker that flies 100 turns
+    past the blade is no longer integrated for all of them (docs/models.md §5.5)."""
+    swing, psi_of = model.swing, model.psi
+
+    @njit(**INLINE_OPTIONS)
+    def coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo):
+        if crossings < 2:  # one whole swing flown first: its amplitude and peak are known
+            return 0.0, data, memo
+        lower, window, k, level, side = data
+        if math.isnan(memo[0]):
+            memo = swing(y, p, window)
+        tau1, t_window = memo
+        if not (tau1 > 0.0 and t_window < math.inf):
+            return 0.0, data, memo
+        reach = t_window + beta(window, k) + h + COAST_MARGIN
+        swings = 0
+        # the skipped time holds the rest of the last passage (j = 0), the next 2 swings - 1
+        # and the start of the one after: all must be clear of the faces
+        for j in range(2 * int(time_left / (2.0 * tau1)) + 1):
+            x = (t_cross + j * tau1 - lower) % TWO_PI  # passage j against the faces
+            if min(x, TWO_PI - x) <= reach:
+                break
+            if j % 2 == 0:
+                swings = j // 2
+        if swings == 0:
+            return 0.0, data, memo
+        skip = 2.0 * tau1 * swings
+        passed = math.floor(((t - lower) + beta(psi_of(y), k) + skip) / TWO_PI)
+        if passed > 0.0:
+            lower += TWO_PI * passed
+            level, side = lower, 1.0
+        return skip, (lower, window, k, level, side), memo
+
+    return coast
+
+
 def lab_window(model):
     """The lab-fixed blade composed with a model (see the module docstring)."""
     psi_of, dpsi_of, monitor = model.psi, model.dpsi, model.monitor
@@ -495,7 +545,8 @@ def lab_window(model):
         return g_rate, free_gap_acceleration(t, y, p, k)
 
     free_flight, _ = make_flight(System(model.rhs, model.scales, values, rates, (1, -1, 1),
-                                        on_event, start_gap, monitor))
+                                        on_event, start_gap, monitor,
+                                        _swing_coast(model) if model.driven else no_coast))
     shift = model.shift
 
     @njit(**INNER_OPTIONS)
