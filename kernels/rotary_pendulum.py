@@ -70,8 +70,9 @@ DECLARATION = Mechanism(
             "the step interpolant (sign samples, extremum check) and Newton polishing on "
             "exact partial steps; the rotor model by the generalised Newton impact; the lab "
             "blade by a gap function on the striker's polar angle, a slide after plastic or "
-            "accumulated (Zeno) contact; computed once per distinct case and rescaled by "
-            "omega1 and l2",
+            "accumulated (Zeno) contact, and at constant rotor speed the whole free swings "
+            "that cannot meet the blade skipped in closed form; computed once per distinct "
+            "case and rescaled by omega1 and l2",
     references="V. E. Erem'yants, N. N. Kynatbekova, Analysis of the kinematics of a "
                "rotary-pendulum impact mechanism (in Russian), Institute of Machine Science "
                "and Automation, National Academy of Sciences of the Kyrgyz Republic; the copy "

@@ -25,6 +25,7 @@ PANELS_PER_ROW = 3
 #: the categories' colours (a qualitative map), and the greys of cells without a value
 CATEGORY_COLOURS = ("#4e79a7", "#f28e2b", "#59a14f", "#e15759", "#b07aa1", "#edc948",
                     "#76b7b2", "#ff9da7", "#9c755f", "#bab0ac")
+UNDETERMINED_COLOUR = "#7f7f7f"  # a flag's negative code: no category was decided
 #: crossings this close (relative) on one edge are drawn as one
 THIN_BAND = 1e-6
 BLANK_GREYS = ("0.86", "0.72", "0.58", "0.93", "0.65", "0.79")
@@ -45,6 +46,18 @@ class Drawn(NamedTuple):
     xticks: list[str]
     yticks: list[str]
     colour_bar: bool
+    legend_colours: list[str]
+
+
+def category_colour(code: int, codes) -> str:
+    """A category's colour, the same in every atlas of a mechanism whatever else it holds:
+    by the meaning's place among the flag's codes >= 0; a negative code (undetermined)
+    grey. Ranked among the codes present, period_1 was orange in one blade chart and blue
+    in the next."""
+    if code < 0:
+        return UNDETERMINED_COLOUR
+    decided = sorted(c for c in codes if c >= 0)
+    return CATEGORY_COLOURS[decided.index(code) % len(CATEGORY_COLOURS)]
 
 
 def _units(ds: xr.Dataset, name: str, degrees: bool) -> str:
@@ -171,8 +184,7 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
         names = flag_names(var)
         present = sorted(int(c) for c in np.unique(var.values) if int(c) in names)
         index = {code: i for i, code in enumerate(present)}
-        cmap = mcolors.ListedColormap([CATEGORY_COLOURS[i % len(CATEGORY_COLOURS)]
-                                       for i in range(len(present))])
+        cmap = mcolors.ListedColormap([category_colour(c, names) for c in present])
         norm = mcolors.BoundaryNorm(np.arange(len(present) + 1) - 0.5, len(present))
         shown = np.vectorize(lambda c: index.get(int(c), np.nan), otypes=[float])(var.values)
         has_value = np.ones(var.shape, bool)
@@ -283,8 +295,7 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
             f"boundaries of {boundaries.attrs.get('variable')}, refined to "
             f"{float(boundaries.attrs.get('tolerance', np.nan)):g}")))
     if is_flag:
-        handles += [Patch(color=CATEGORY_COLOURS[i % len(CATEGORY_COLOURS)], label=names[c])
-                    for c, i in index.items()]
+        handles += [Patch(color=category_colour(c, names), label=names[c]) for c in present]
     else:
         bar = fig.colorbar(mesh, ax=axes.ravel().tolist(), shrink=0.9)
         bar.set_label(_label(ds, color, degrees))
@@ -317,7 +328,8 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                   used[0].get_xscale(), used[0].get_yscale(),
                   [t.get_text() for t in used[0].get_xticklabels() if t.get_text()],
                   [t.get_text() for t in used[0].get_yticklabels() if t.get_text()],
-                  not is_flag)
+                  not is_flag, [mcolors.to_hex(h.get_facecolor() if isinstance(h, Patch) else h.get_color())
+                                for h in handles])
     plt.close(fig)
     return drawn
 

@@ -120,6 +120,22 @@ def test_a_flag_is_drawn_as_categories_with_its_meanings(tmp_path, pendulum):
     assert drawn.panel_titles == [""]  # omega1 taken at one value: one panel
 
 
+def test_a_category_keeps_its_colour_whatever_else_the_chart_holds(tmp_path, pendulum):
+    """Colours ranked among the categories present gave period_1 one colour in one blade
+    chart and another in the next (an undetermined cell shifted them all): a meaning's
+    colour follows its place among all the flag's meanings, undetermined grey."""
+    ds = xr.open_dataset(pendulum)
+    colour_of = {}
+    for omega1 in ds.omega1.values:
+        for rows in [slice(None)] + [slice(i, i + 1) for i in range(ds.sizes["R"])]:
+            sub = ds.isel(R=rows)
+            drawn = design_chart(sub, "k", "R", "regime", tmp_path / "r.png",
+                                 at={"omega1": (float(omega1), "")})
+            for label, colour in zip(drawn.legend, drawn.legend_colours):
+                assert colour_of.setdefault(label, colour) == colour, label
+    assert len(set(colour_of.values())) == len(colour_of) >= 2
+
+
 def test_blank_cells_name_their_status_and_usable_results_are_not_blank(tmp_path, pendulum):
     ds = xr.open_dataset(pendulum)
     drawn = design_chart(ds, "k", "R", "impact_speed", tmp_path / "v.png",

@@ -114,8 +114,8 @@ def section_jacobians(model, tool, design, rtol=1e-12, eps=2e-4, transient=600):
 def test_multipliers_equal_central_differences_of_the_map_at_random_designs(model, tool):
     """At random designs with a steady cycle (chatter: the next test): the
     kernel's multiplier at its default tolerance (auto, tol 1e-8) and the tangent carried
-    at rtol 1e-12 both agree to 1e-6 with central differences of the section map at rtol
-    1e-12 (Richardson-extrapolated, steps 2e-4 and 1e-4)."""
+    at rtol 1e-12 (1e-13 on the blade) both agree to 1e-6 with central differences of the
+    section map at the same rtol (Richardson-extrapolated, steps 2e-4 and 1e-4)."""
     rng = np.random.default_rng(16 + SYSTEMS.index((model, tool)))
     n = 40 if tool == "rotor_stop" else 120  # most blade designs escape or chatter
     design = draw(rng, tool, n)
@@ -126,7 +126,13 @@ def test_multipliers_equal_central_differences_of_the_map_at_random_designs(mode
     met = 0
     for j in cycles[:8]:
         one = {name: float(v[j]) for name, v in design.items()}
-        ok, period, carried, differenced = section_jacobians(model, tool, one)
+        # on the blade the oracle runs at rtol 1e-13: the free swings coast in closed form
+        # (docs/models.md section 5.5), where a perturbed start may skip a swing more or
+        # less, so the integration errors of the differenced runs no longer cancel; a
+        # period-6 design's differences were 1.4e-6 off at 1e-12 (2e-8 at 1e-13), while
+        # the carried tangent stayed within 1e-7 of its 1e-13 value
+        ok, period, carried, differenced = section_jacobians(
+            model, tool, one, rtol=1e-13 if tool == "lab_window" else 1e-12)
         assert ok and period >= 1, one
         mu_fd = leading(differenced)
         assert abs(leading(carried) - mu_fd) <= 1e-6 * max(1.0, abs(mu_fd)), one
