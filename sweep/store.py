@@ -148,16 +148,17 @@ _DEFLATE, _SHUFFLE = 1, 2
 ISAL_LEVEL_MAX = 3
 
 
-def _deflate(data: bytes, level: int) -> bytes:
-    """A zlib stream of ``data`` at deflate effort ``level`` (1-9), which any netCDF/HDF5
-    reader inflates: by ISA-L for levels 1-3 (on an atlas's shuffled doubles its level 1
-    ran at 1.1 GB/s against zlib's 75 MB/s at level 1, for a file 3 % larger), by zlib
-    above, where a user asked for the smallest file."""
+def _deflate(level: int):
+    """``compress(data) -> bytes``: a zlib stream at deflate effort ``level`` (1-9), which
+    any netCDF/HDF5 reader inflates: ISA-L's for levels 1-3 (on an atlas's shuffled doubles
+    its level 1 ran at 1.1 GB/s against zlib's 75 MB/s at level 1, for a file 3 % larger),
+    zlib's above, where a user asked for the smallest file. Chosen once per variable, not
+    per chunk."""
     if level <= ISAL_LEVEL_MAX:
         from isal import isal_zlib
 
-        return isal_zlib.compress(data, level)
-    return zlib.compress(data, level)
+        return lambda data: isal_zlib.compress(data, level)
+    return lambda data: zlib.compress(data, level)
 
 
 def _chunk_encoder(dataset):
@@ -169,7 +170,8 @@ def _chunk_encoder(dataset):
         code, _, options, _ = plist.get_filter(i)
         if code not in (_SHUFFLE, _DEFLATE):
             raise ValueError(f"{dataset.name}: HDF5 filter {code} is not written here")
-        steps.append((code, dataset.dtype.itemsize if code == _SHUFFLE else int(options[0])))
+        steps.append((code, dataset.dtype.itemsize if code == _SHUFFLE
+                      else _deflate(int(options[0]))))
     dtype, shape = dataset.dtype, dataset.chunks
 
     def encode(values):
@@ -183,7 +185,7 @@ def _chunk_encoder(dataset):
             if code == _SHUFFLE:  # byte j of every element together
                 data = data.reshape(-1, option).T.copy()
             else:
-                data = _deflate(data.tobytes(), option)
+                data = option(data.tobytes())
         return data if isinstance(data, bytes) else data.tobytes()
 
     return encode

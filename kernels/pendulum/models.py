@@ -361,7 +361,13 @@ def rise_to_saddle(e, xs, xi):
 def paper_critical_speed(k, xi):
     """v_crit (P4): launched from psi = 0 faster than this, the pendulum goes over the top:
     v_crit^2 = xi expm1(g(xs) - g(x0)), the rise over the whole swing, x0 - xs = 4k."""
-    return math.sqrt(xi * math.expm1(rise_to_saddle(4.0 * k, (1.0 - k) ** 2, xi)))
+    return _speed_for_rise(rise_to_saddle(4.0 * k, (1.0 - k) ** 2, xi), xi)
+
+
+@njit(**INLINE_OPTIONS)
+def _speed_for_rise(rise, xi):
+    """The launch speed at psi = 0 whose swing rises g by ``rise``: v^2 = xi expm1(rise)."""
+    return math.sqrt(xi * math.expm1(rise))
 
 
 @njit(**KERNEL_OPTIONS)
@@ -388,7 +394,7 @@ def paper_amplitude(v, k, xi):
     of the bracket, which overshot and bisected)."""
     x0, xs = (1.0 + k) ** 2, (1.0 - k) ** 2
     full = rise_to_saddle(4.0 * k, xs, xi)
-    if v >= math.sqrt(xi * math.expm1(full)):  # = paper_critical_speed(k, xi)
+    if v >= _speed_for_rise(full, xi):  # paper_critical_speed, its rise kept
         return math.nan
     rise = math.log1p(v * v / xi)
     if rise <= rise_from_launch(2.0 * k, x0, xi):
