@@ -1,5 +1,6 @@
 """Rotary pendulum: steady states per second per core for each model x tool (DOPRI5 at rtol
-1e-8 through the kernel's entry point, as a sweep runs it), the closed form, and SciPy's
+1e-8 through the kernel's entry point, as a sweep runs it) and the flights each steady
+state took, the closed form, and SciPy's
 solve_ivp (DOP853 with an impact event and a restart loop, the same tolerance) on the
 paper model.
 
@@ -30,6 +31,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, os.environ.get("BENCH_ROOT", str(HERE.parent)))
 
 XI = 4.0
+FLIGHTS = "flights per steady state: "  # the key's prefix for those counts
 SYSTEMS = [(m, t) for t in ("rotor_stop", "lab_window") for m in ("paper", "rigid", "rotor")]
 DESIGNS = {"rotor_stop": 400, "lab_window": 12}  # per system
 
@@ -78,9 +80,13 @@ def measure(repeats=5):
         best = math.inf
         for _ in range(repeats):
             t = time.perf_counter()
-            kr.run(params, dopri)
+            out = kr.run(params, dopri)[0]
             best = min(best, time.perf_counter() - t)
         result[f"{model} on {tool}"] = params.shape[1] / best
+        # flights (located impacts) per design that reaches a steady cycle
+        cycle = np.isfinite(out[decl.output_index.amplitude])
+        result[f"{FLIGHTS}{model} on {tool}"] = float(out[decl.output_index.n_events][cycle]
+                                                      .mean())
     params = designs(kr, "paper", "rotor_stop", 2000, seed=7)
     closed = decl.method_record(integrator="closed_form")
     kr.run(params[:, :1], closed)
@@ -171,11 +177,14 @@ def main():
         best = {who: {key: max(r[key] for r in runs[1:]) for key in runs[0]}
                 for who, runs in rounds.items()}
         print(f"steady states per second, this tree against {args.against} "
-              f"(best of {args.rounds} rounds in turn):")
-        for key in best["this"]:
+              f"(best of {args.rounds} rounds in turn; then the flights per steady state):")
+        for key in sorted(best["this"], key=lambda key: key.startswith(FLIGHTS)):
+            if key.startswith(FLIGHTS):  # counts, not rates: the same every round
+                best["this"][key] = rounds["this"][0][key]
+                best[args.against][key] = rounds[args.against][0][key]
             ratio = best["this"][key] / best[args.against][key]
-            print(f"  {key:24s} {best['this'][key]:10,.1f} {best[args.against][key]:10,.1f}"
-                  f"   ratio {ratio:5.2f}")
+            print(f"  {key.replace(FLIGHTS, 'flights: '):24s} {best['this'][key]:10,.2f} "
+                  f"{best[args.against][key]:10,.2f}   ratio {ratio:5.2f}")
             result[key] = {"this": best["this"][key], args.against: best[args.against][key],
                            "ratio": ratio}
     else:
@@ -186,7 +195,7 @@ def main():
                                        / result["scipy_dop853_paper_rtol_1e-8"])
         for key, value in result.items():
             if key != "machine":
-                print(f"  {key:30s} {value:12,.1f}")
+                print(f"  {key:50s} {value:12,.2f}")
     HERE.joinpath("results", "rotary_pendulum.json").write_text(json.dumps(result, indent=2))
 
 

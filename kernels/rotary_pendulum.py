@@ -129,8 +129,9 @@ DECLARATION = Mechanism(
         Output("impact_interval", "rad", "rotor angle between impacts in steady state "
                "(tau1; on the blade, between the impacts opening each contact)", "τ1"),
         Output("impacts_to_converge", "1", "impacts from rest to the steady state (to "
-               "1e-12 by the closed form, to 10 rtol when integrated), or until escape",
-               diagnostic=True),
+               "1e-12 by the closed form, to 10 rtol when integrated; the rotor model on "
+               "its stop: estimated past its extrapolated transient, within 3 impacts or "
+               "35 %), or until escape", diagnostic=True),
         Output("acceleration_peak", "rad s-2", "peak relative angular acceleration of the "
                "pendulum in steady state", "|ψ''|max"),
         Output("restitution_critical", "1", "largest R with a periodic impact regime "

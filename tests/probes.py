@@ -326,3 +326,36 @@ def accumulation(model: str):
         return tangent[:, 0].copy(), (ends[0] - ends[1]) / (2.0 * eps)
 
     return probe
+
+
+@cache
+def impacts_from_rest(model: str, tool: str):
+    """probe(p, data, r, settings, tol, limit) -> (impacts, key): the section map iterated
+    from rest with nothing extrapolated, until a section repeats the one before to tol
+    (relative, as the driver classifies period 1): the impacts a design takes to settle,
+    counted as the driver counts them, and the section state there; (-1, last key) where
+    a section ends otherwise or limit sections do not settle."""
+    c = contact(model, tool)
+    section = make_impact_map(c, False).section
+    first, key_of = c.first, c.key
+
+    @njit
+    def probe(p, data, r, s, tol, limit):
+        t, y, data = first(p, data, 0)
+        none = np.empty((5, 0))
+        before = key_of(t, y, data, p)
+        for n in range(1, limit + 1):
+            sec = section(t, y, data, p, r, s, False, none, 0)
+            if sec.outcome != 0:
+                return -1, before
+            t, y, data = sec.t, sec.y, sec.data
+            key = key_of(t, y, data, p)
+            settled = n >= 2
+            for i in range(len(key)):
+                settled = settled and abs(key[i] - before[i]) <= tol * max(1.0, abs(key[i]))
+            if settled:
+                return n - 1, key
+            before = key
+        return -1, before
+
+    return probe
