@@ -52,6 +52,15 @@ def section_log(sections, rtol=1e-11, atol=None, **design):
 def rotor_reference(k, xi, kappa, r, j1, slope, idle, impacts):
     """Impact-to-impact iteration of P8-P10 with SciPy; returns the last flight's
     (amplitude, flight time, rotor angle, pre-impact (phi1', psi'))."""
+    last = None
+    for last in rotor_flights(k, xi, kappa, r, j1, slope, idle, impacts):
+        if last is None:
+            return None
+    return last
+
+
+def rotor_flights(k, xi, kappa, r, j1, slope, idle, impacts):
+    """The flights of rotor_reference from rest, one at a time (None: escaped)."""
     lam = kappa * (1 + 1 / xi)
     kc = k * lam  # l1 over the distance to the centre of mass
 
@@ -87,12 +96,58 @@ def rotor_reference(k, xi, kappa, r, j1, slope, idle, impacts):
         w, v = np.array([w, v]) + m_inv_jt * impulse
         sol = solve_ivp(rhs, (0, 1e3), [0.0, w, 0.0, v], events=(hit, over, turn), **TIGHT)
         if sol.t_events[1].size:
-            return None
+            yield None
+            return
         y = sol.y_events[0][0]
         amp = -sol.y_events[2][:, 2].min()
         w, v = y[1], y[3]
-        last = (amp, sol.t_events[0][0], y[0], w, v)
-    return last
+        yield amp, sol.t_events[0][0], y[0], w, v
+
+def test_rotor_on_its_stop_matches_scipy_at_random_designs():
+    """Random designs of the wide domain (light rotors on soft motors to heavy ones; the
+    first 6 that do not escape): the kernel at rtol 1e-11, whose sequence jumps over its
+    transient (the affine map's fixed point, Broyden's steps), against SciPy's plain
+    impact-to-impact iteration from rest (DOP853 at 1e-12) until the pre-impact state
+    repeats to 1e-11: every cycle output to 1e-8, and the impacts from rest (SciPy's
+    sequence counted as the kernel counts, to 10 rtol) within 3 or 35 %."""
+    rng = np.random.default_rng(31)
+    n = 40
+    k = rng.uniform(0.5, 2.5, n)
+    design = dict(k=k, kappa=(1 + k) ** 2 / (4 * k) * rng.uniform(1.05, 1.5, n),
+                  R=rng.uniform(0.0, 0.3, n), rotor_inertia_ratio=rng.uniform(5.0, 200.0, n),
+                  motor_slope=rng.uniform(0.5, 50.0, n))
+    rtol = 1e-11
+    out, status, _ = kernel_points("rotary_pendulum", dict(integrator="dopri5", rtol=rtol,
+                                                           atol=1e-13),
+                                   model="rotor", tool="rotor_stop", omega1=1.0, l2=1.0,
+                                   xi=XI, **design)
+    chosen = np.flatnonzero(np.asarray(status) == "ok")[:6]
+    assert len(chosen) == 6
+    for j in chosen:
+        one = {name: float(v[j]) for name, v in design.items()}
+        before, count = None, None
+        for n_flight, flight in enumerate(rotor_flights(
+                one["k"], XI, one["kappa"], one["R"], one["rotor_inertia_ratio"],
+                one["motor_slope"], 1.0, 400), start=1):
+            assert flight is not None, one
+            state = np.array(flight[3:])
+            if before is not None:
+                step = np.abs(state - before) / np.maximum(1.0, np.abs(state))
+                if count is None and n_flight >= 2 and np.all(step <= 10 * rtol):
+                    count = n_flight - 1
+                if np.all(step <= 1e-11):
+                    break
+            before = state
+        amp, tau, angle, w, v = flight
+        assert out["amplitude"][j] == pytest.approx(amp, rel=1e-8)
+        assert out["frequency_ratio"][j] == pytest.approx(math.pi / tau, rel=1e-8)
+        assert out["impact_interval"][j] == pytest.approx(angle, rel=1e-8)
+        assert out["impact_speed"][j] == pytest.approx((1 + one["k"]) * w + v, rel=1e-8)
+        assert out["rotor_speed_ratio"][j] == pytest.approx(angle / tau, rel=1e-8)
+        assert count is not None
+        assert abs(out["impacts_to_converge"][j] - count) <= max(3, 0.35 * count), (one,
+                                                                                   count)
+
 
 def test_rotor_impacts_to_converge_count_the_sequence_from_rest_not_the_sections_flown():
     """The rotor model's sequence on its stop jumps over most of its transient (the affine
