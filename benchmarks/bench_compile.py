@@ -40,7 +40,10 @@ def main():
     names = args.examples or subprocess.run(
         [SWEEP, "examples"], check=True, capture_output=True, text=True).stdout.split("\n")
     names = [line.split()[0] for line in names if line.strip()]
-    result = {"machine": platform.node(), "rounds": args.rounds}
+    path = HERE.joinpath("results", "compile.json")
+    # examples measured before and not now keep their record
+    result = json.loads(path.read_text()) if path.exists() else {}
+    result["machine"] = platform.node()
     print(f"{'example':24s} {'cold s':>8s} {'warm s':>8s} {'cold - warm':>12s}")
     for name in names:
         with tempfile.TemporaryDirectory() as tmp:
@@ -54,9 +57,10 @@ def main():
                 cold.append(timed_run(spec, cache, tmp / "a.nc"))
                 warm.append(timed_run(spec, cache, tmp / "b.nc"))
         c, w = statistics.median(cold), statistics.median(warm)
-        result[name] = {"cold_s": c, "warm_s": w, "difference_s": c - w}
+        result[name] = {"cold_s": c, "warm_s": w, "difference_s": c - w,
+                        "rounds": args.rounds}
         print(f"{name:24s} {c:8.1f} {w:8.1f} {c - w:12.1f}", flush=True)
-    HERE.joinpath("results", "compile.json").write_text(json.dumps(result, indent=2))
+    path.write_text(json.dumps(result, indent=2))
 
 
 if __name__ == "__main__":
