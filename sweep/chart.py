@@ -328,8 +328,9 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                   used[0].get_xscale(), used[0].get_yscale(),
                   [t.get_text() for t in used[0].get_xticklabels() if t.get_text()],
                   [t.get_text() for t in used[0].get_yticklabels() if t.get_text()],
-                  not is_flag, [mcolors.to_hex(h.get_facecolor() if isinstance(h, Patch) else h.get_color())
-                                for h in handles])
+                  not is_flag,
+                  [mcolors.to_hex(h.get_facecolor() if isinstance(h, Patch) else h.get_color())
+                   for h in handles])
     plt.close(fig)
     return drawn
 

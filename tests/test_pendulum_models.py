@@ -103,6 +103,17 @@ def rotor_flights(k, xi, kappa, r, j1, slope, idle, impacts):
         w, v = y[1], y[3]
         yield amp, sol.t_events[0][0], y[0], w, v
 
+
+def wide_rotor_designs(rng, n):
+    """n random rotor-model designs on the stop, light rotors on soft motors to heavy ones,
+    the contact outboard of the centre of percussion (the pendulum returns)."""
+    k = rng.uniform(0.5, 2.5, n)
+    return dict(k=k, kappa=(1 + k) ** 2 / (4 * k) * rng.uniform(1.05, 1.5, n),
+                R=rng.uniform(0.0, 0.3, n), xi=rng.uniform(1.0, 8.0, n),
+                rotor_inertia_ratio=rng.uniform(5.0, 200.0, n),
+                motor_slope=rng.uniform(0.5, 50.0, n))
+
+
 def test_rotor_on_its_stop_matches_scipy_at_random_designs():
     """Random designs of the wide domain (light rotors on soft motors to heavy ones; the
     first 6 that do not escape): the kernel at rtol 1e-11, whose sequence jumps over its
@@ -110,24 +121,19 @@ def test_rotor_on_its_stop_matches_scipy_at_random_designs():
     impact-to-impact iteration from rest (DOP853 at 1e-12) until the pre-impact state
     repeats to 1e-11: every cycle output to 1e-8, and the impacts from rest (SciPy's
     sequence counted as the kernel counts, to 10 rtol) within 3 or 35 %."""
-    rng = np.random.default_rng(31)
-    n = 40
-    k = rng.uniform(0.5, 2.5, n)
-    design = dict(k=k, kappa=(1 + k) ** 2 / (4 * k) * rng.uniform(1.05, 1.5, n),
-                  R=rng.uniform(0.0, 0.3, n), rotor_inertia_ratio=rng.uniform(5.0, 200.0, n),
-                  motor_slope=rng.uniform(0.5, 50.0, n))
+    design = wide_rotor_designs(np.random.default_rng(31), 40)
     rtol = 1e-11
     out, status, _ = kernel_points("rotary_pendulum", dict(integrator="dopri5", rtol=rtol,
                                                            atol=1e-13),
                                    model="rotor", tool="rotor_stop", omega1=1.0, l2=1.0,
-                                   xi=XI, **design)
+                                   **design)
     chosen = np.flatnonzero(np.asarray(status) == "ok")[:6]
     assert len(chosen) == 6
     for j in chosen:
         one = {name: float(v[j]) for name, v in design.items()}
         before, count = None, None
         for n_flight, flight in enumerate(rotor_flights(
-                one["k"], XI, one["kappa"], one["R"], one["rotor_inertia_ratio"],
+                one["k"], one["xi"], one["kappa"], one["R"], one["rotor_inertia_ratio"],
                 one["motor_slope"], 1.0, 400), start=1):
             assert flight is not None, one
             state = np.array(flight[3:])
@@ -161,13 +167,7 @@ def test_rotor_impacts_to_converge_count_the_sequence_from_rest_not_the_sections
     counts were exact at 37 of 37 designs."""
     from tests import probes
     from kernels.pendulum import systems
-    rng = np.random.default_rng(2)
-    n = 150
-    k = rng.uniform(0.5, 2.5, n)
-    design = dict(k=k, kappa=(1 + k) ** 2 / (4 * k) * rng.uniform(1.05, 1.5, n),
-                  R=rng.uniform(0.0, 0.3, n), xi=rng.uniform(1.0, 8.0, n),
-                  rotor_inertia_ratio=rng.uniform(5.0, 200.0, n),
-                  motor_slope=rng.uniform(0.5, 50.0, n))
+    design = wide_rotor_designs(np.random.default_rng(2), 150)
     rtol = 1e-10
     out, status, _ = kernel_points("rotary_pendulum", dict(integrator="dopri5", rtol=rtol,
                                                            atol=rtol, max_impacts=300),
