@@ -8,8 +8,9 @@ With ``--against REF`` (a git revision) the same designs also run on that revisi
 kernels, in a checkout of their own, the two in turn (A B A B ...), and the ratios
 (this tree over REF) are printed: the throughput before and after a change, in one run.
 
-Run: .venv/bin/python benchmarks/bench_rotary_pendulum.py [--against REF]
-     (writes benchmarks/results/rotary_pendulum.json)
+Run: .venv/bin/python benchmarks/bench_rotary_pendulum.py [--against REF] [--closed-form]
+     (writes benchmarks/results/rotary_pendulum.json; --closed-form: only the closed form,
+     to rotary_pendulum_closed_form.json)
 """
 
 from __future__ import annotations
@@ -67,14 +68,14 @@ def designs(kr, model, tool, n, seed):
     return np.array([cols[p.name] for p in decl.parameters])
 
 
-def measure(repeats=5):
+def measure(repeats=5, closed_form_only=False):
     """Steady states per second of each system at DOPRI5 rtol 1e-8 (best of repeats, after
     a warm-up that compiles), and of the closed form."""
     from kernels import rotary_pendulum as kr
     decl = kr.DECLARATION
     dopri = decl.method_record(integrator="dopri5", rtol=1e-8, atol=1e-10)
     result = {}
-    for i, (model, tool) in enumerate(SYSTEMS):
+    for i, (model, tool) in enumerate([] if closed_form_only else SYSTEMS):
         params = designs(kr, model, tool, DESIGNS[tool], seed=100 + i)
         kr.run(params[:, :1], dopri)  # compile
         best = math.inf
@@ -99,10 +100,11 @@ def measure(repeats=5):
     return result
 
 
-def measure_in(root: Path) -> dict:
+def measure_in(root: Path, closed_form_only=False) -> dict:
     """measure() on the kernels of another checkout, in a process of its own."""
     env = dict(os.environ, BENCH_ROOT=str(root))
-    out = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--measure"],
+    out = subprocess.run([sys.executable, str(Path(__file__).resolve()), "--measure"]
+                         + ["--closed-form"] * closed_form_only,
                          env=env, capture_output=True, text=True)
     if out.returncode:
         raise SystemExit(f"measuring in {root} failed:\n{out.stderr}")
@@ -156,9 +158,11 @@ def main():
     parser.add_argument("--measure", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--against", metavar="REF", help="a git revision to compare with")
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--closed-form", action="store_true",
+                        help="only the closed form (the paper model on the rotor stop)")
     args = parser.parse_args()
     if args.measure:
-        print(json.dumps(measure()))
+        print(json.dumps(measure(closed_form_only=args.closed_form)))
         return
     result = {"machine": platform.node()}
     if args.against:
@@ -169,8 +173,8 @@ def main():
             try:
                 rounds = {"this": [], args.against: []}
                 for _ in range(args.rounds + 1):  # the first round compiles both: not counted
-                    rounds["this"].append(measure_in(HERE.parent))
-                    rounds[args.against].append(measure_in(old))
+                    rounds["this"].append(measure_in(HERE.parent, args.closed_form))
+                    rounds[args.against].append(measure_in(old, args.closed_form))
             finally:
                 subprocess.run(["git", "-C", str(HERE.parent), "worktree", "remove", "--force",
                                 str(old)], check=True)
@@ -187,6 +191,9 @@ def main():
                   f"{best[args.against][key]:10,.2f}   ratio {ratio:5.2f}")
             result[key] = {"this": best["this"][key], args.against: best[args.against][key],
                            "ratio": ratio}
+    elif args.closed_form:
+        result.update(measure(closed_form_only=True))
+        print(f"  paper closed form {result['paper closed form']:12,.2f}")
     else:
         rates = measure()
         result.update(rates)
@@ -196,7 +203,8 @@ def main():
         for key, value in result.items():
             if key != "machine":
                 print(f"  {key:50s} {value:12,.2f}")
-    HERE.joinpath("results", "rotary_pendulum.json").write_text(json.dumps(result, indent=2))
+    name = "rotary_pendulum_closed_form.json" if args.closed_form else "rotary_pendulum.json"
+    HERE.joinpath("results", name).write_text(json.dumps(result, indent=2))
 
 
 if __name__ == "__main__":

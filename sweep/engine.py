@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import itertools
 import math
+import sys
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -64,7 +66,31 @@ def sample_parameters(sweep: Sweep) -> np.ndarray:
 
 def warm_up(sweep: Sweep) -> None:
     """Run the kernel on the sample points (compiling it on a first run)."""
-    sweep.kernel(sample_parameters(sweep), sweep.method_record)
+    with numba_without_blas():
+        sweep.kernel(sample_parameters(sweep), sweep.method_record)
+
+
+#: the module numba imports, on its first compile or cache load, to learn whether np.dot
+#: and np.linalg may call BLAS
+BLAS_PROBE = "scipy.linalg.cython_blas"
+
+
+@contextmanager
+def numba_without_blas():
+    """numba's first compile or cache load in a process imports scipy.linalg (0.22 s here, a
+    sixth of a cheap sweep's time beyond the import floor) only to learn whether BLAS is
+    there; no kernel calls BLAS (np.dot, np.linalg, @). While numba has not looked yet and
+    scipy.linalg is not loaded, the probe's import fails for that moment: numba records
+    "no BLAS", and scipy imports normally afterwards."""
+    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules:
+        yield
+        return
+    sys.modules[BLAS_PROBE] = None  # an import of a None entry raises ImportError
+    try:
+        yield
+    finally:
+        if BLAS_PROBE in sys.modules and sys.modules[BLAS_PROBE] is None:
+            del sys.modules[BLAS_PROBE]
 
 
 def _parameter_matrix(sweep: Sweep, n: int, axis_values) -> np.ndarray:

@@ -47,10 +47,47 @@ def test_importing_kernels_loads_no_forbidden_module():
     assert not loaded & FORBIDDEN, loaded & FORBIDDEN
 
 
+def _blas_calls(path: Path):
+    """np.dot, np.vdot, np.matmul, np.inner, np.outer, np.kron, np.linalg.*, and the @
+    operator: what numba compiles to BLAS or LAPACK calls."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.BinOp, ast.AugAssign)) and isinstance(node.op, ast.MatMult):
+            yield "@", node.lineno
+        elif isinstance(node, ast.Attribute) and node.attr in {
+                "dot", "vdot", "matmul", "inner", "outer", "kron", "linalg"}:
+            yield node.attr, node.lineno
+
+
+def test_kernels_call_no_blas():
+    """The sweep's warm-up keeps numba from importing scipy.linalg to look for BLAS
+    (engine.numba_without_blas, 0.22 s of a cheap sweep): that holds only while no kernel
+    calls it."""
+    bad = [f"{f.name}:{line} {name}" for f in sorted(KERNELS.rglob("*.py"))
+           for name, line in _blas_calls(f)]
+    assert not bad, bad
+
+
+def test_the_warm_up_loads_no_scipy_linalg_and_scipy_still_imports():
+    code = ("import sys\n"
+            "from sweep import spec, engine\n"
+            "sw = spec.parse('mechanism = \"rotary_pendulum\"\\n[grid]\\n"
+            "k = {start = 1.0, stop = 2.0, num = 3}', 'test')\n"
+            "engine.warm_up(sw)\n"
+            "print('scipy.linalg' in sys.modules)\n"
+            "import scipy.linalg.cython_blas\n"
+            "print('scipy.linalg' in sys.modules)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=KERNELS.parent)
+    assert out.stdout.split() == ["False", "True"], out.stdout + out.stderr
+
+
 def test_boundary_check_catches_a_violation(tmp_path):
     bad = tmp_path / "bad.py"
-    bad.write_text("import numpy\nfrom scipy.optimize import brentq\n")
+    bad.write_text("import numpy\nfrom scipy.optimize import brentq\n"
+                   "x = numpy.linalg.solve(a, b) + a @ b\n")
     assert ("scipy", 2) in list(_imported_roots(bad))
+    assert {("linalg", 3), ("@", 3)} <= set(_blas_calls(bad))
 
 
 def test_numba_cache_is_keyed_by_each_modules_import_closure(tmp_path):

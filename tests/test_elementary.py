@@ -1,11 +1,12 @@
-"""The kernels' own atan2 against libm (math.atan2), in ulp."""
+"""The kernels' own atan2 and sine-cosine pair against libm (math.atan2, math.sin,
+math.cos), in ulp."""
 
 import math
 
 import numpy as np
 import pytest
 
-from kernels.elementary import atan2_fast, atan_fast
+from kernels.elementary import atan2_fast, atan_fast, sincos_quadrant
 
 
 def ulp_error(a, b):
@@ -32,6 +33,25 @@ def test_atan2_fast_quadrants_and_accuracy():
     for a, b in [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (1.0, -1.0),
                  (-1.0, -1.0), (0.0, 0.0), (1e-300, 1.0), (1.0, 1e-300)]:
         assert atan2_fast(a, b) == pytest.approx(math.atan2(a, b), abs=4e-16)
+
+
+def test_sincos_quadrant_within_1_ulp_of_libm_on_the_first_quadrant():
+    """sin and cos of x in [0, pi/2] from one reduction: random points, tiny arguments, and
+    the ends and the switch at pi/4 with their neighbours; a Taylor series of the wrong
+    order or an unsplit pi/2 - x (x near pi/2: cos x is the small difference) fails it."""
+    rng = np.random.default_rng(5)
+    quarter = 0.25 * math.pi
+    xs = np.concatenate([rng.uniform(0.0, 0.5 * math.pi, 40000), 10 ** rng.uniform(-300, -1, 2000),
+                         0.5 * math.pi - 10 ** rng.uniform(-15, -1, 2000),
+                         [0.0, 5e-324, quarter, np.nextafter(quarter, 0), np.nextafter(quarter, 4),
+                          0.5 * math.pi, np.nextafter(0.5 * math.pi, 0)]])
+    worst_sin = worst_cos = 0.0
+    for x in xs:
+        s, c = sincos_quadrant(float(x))
+        worst_sin = max(worst_sin, ulp_error(s, math.sin(x)))
+        worst_cos = max(worst_cos, ulp_error(c, math.cos(x)))
+    assert worst_sin <= 1.0 and worst_cos <= 1.0, (worst_sin, worst_cos)
+    assert all(math.isnan(v) for v in sincos_quadrant(math.nan))
 
 
 def test_golden_section_finds_a_maximum_with_one_evaluation_per_step():

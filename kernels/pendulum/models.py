@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
+from kernels.elementary import sincos_quadrant
 from kernels.impact.events import make_illinois
 from kernels.impact.tuples import relative_scales
 
@@ -35,8 +36,8 @@ Model = namedtuple("Model", [
     "psi", "dpsi", "compose", "critical_speed", "shift", "driven", "jacobian",
     "response_slope", "tangent_state", "tangent_coordinates", "swing"])
 
-#: the half period's Gauss-Legendre panels: 24 nodes each, halving towards the turning point
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(24)
+#: the half period's Gauss-Legendre panels: 20 nodes each, halving towards the turning point
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
 
 
 # ---------------------------------------------------------------- constant rotor speed
@@ -329,10 +330,13 @@ def log1p_excess(z):
     if abs(z) < 0.5:
         w = z / (2.0 + z)
         u = w * w
-        t = 0.0
-        for j in range(_EXCESS_SERIES.shape[0] - 1, -1, -1):
-            t = t * u + _EXCESS_SERIES[j]
-        return 2.0 * u * (1.0 / (1.0 - w) - w * t)
+        u2 = u * u
+        # T in two interleaved Horner chains (even and odd powers of u), half the latency
+        even, odd = 0.0, 0.0
+        for j in range(_EXCESS_SERIES.shape[0] - 2, -1, -2):
+            even = even * u2 + _EXCESS_SERIES[j]
+            odd = odd * u2 + _EXCESS_SERIES[j + 1]
+        return 2.0 * u * ((1.0 + 0.5 * z) - w * (even + u * odd))  # 1/(1 - w) = 1 + z/2
     return z - math.log1p(z)
 
 
@@ -439,6 +443,11 @@ _panel_half_t = njit(**INLINE_OPTIONS)(_half_t)
 _PANEL_HALF_T = np.array([[[_half_t(0.25 * math.pi * 2.0 ** -j, x, last) for x in _GL_X]
                            for j in range(40)] for last in (False, True)])
 _PANEL_SIN, _PANEL_COS = np.sin(_PANEL_HALF_T), np.cos(_PANEL_HALF_T)
+#: the largest rise G of g from the turning point over the half period's last panel, and
+#: expm1 of it: the complex zeros of u (G = 2 pi i) then lie beyond the panel (2 and 4 gave
+#: tau1 to 1e-15 on random designs with 24 nodes, 8 to 1e-14; 2 costs 1 % more panels)
+_PANEL_RISE = 2.0
+_PANEL_RISE_EXPM1 = math.expm1(_PANEL_RISE)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -456,20 +465,33 @@ def paper_half_period(v, k, xi, amplitude):
     Near the separatrix (A -> pi) the integrand has a near-singularity at t = 0 of width
     w = sqrt(2 (pi - A)/A) (where psi = A sin s would reach the saddle at pi): one rule on
     [0, pi/2] converges ever slower (96 nodes were off by 6e-10 at 1e-9 of v_crit). Panels
-    t in [g, 2g], g = 2^-j pi/4, each lie one length away from it, so 24 nodes per panel
-    reach round-off (16 did not at xi ~ 0.03); the panels stop once the last, [0, 2g], is
-    narrower than w: 2 panels (48 nodes) for most flights, about 25 within 64 ulp of v_crit.
+    t in [g, 2g], g = 2^-j pi/4, each lie one length away from it, so 20 nodes per panel
+    reach round-off (6e-15 on 6,000 random designs against 48; 16 gave 2e-12, 12 per outer
+    panel 7e-10); the panels stop once the last, [0, 2g], is narrower than w: one or two
+    panels for most flights, about 25 within 64 ulp of v_crit.
 
     The nodes are placed by their distance t/2 from the turning point, tabulated with its
     sine and cosine (_PANEL_HALF_T): placed by s, sin(pi/4 - s/2) lost the digits of t next
     to the saddle, and tau1 was off by up to 2e-11 within 1e-12 of v_crit (now 2e-15).
-    sin((A + psi)/2) and cos(psi) follow from sin(A), cos(A) and the node's sin, cos of
-    (A - psi)/2 by the angle sums: two sines per node instead of five, 1.35-1.6x."""
+    sin((A + psi)/2) and cos(psi/2) follow from the sines and cosines of A and A/2 and the
+    node's of (A - psi)/2 by the angle sums: one sine-cosine pair per node (sincos_quadrant,
+    one reduction on [0, pi/2]) instead of five sines.
+
+    A large rise L (small xi, fast launches) brings other near-singularities to the turning
+    point: u = xi expm1(G) vanishes where G = 2 pi i, about where the real rise G from the
+    turning point reaches 2 pi, and 24 nodes on one panel were off by 1.4e-10 at L = 55
+    (xi = 0.03, k = 2.5). The last panel [0, 2g] is therefore also kept within a rise of
+    _PANEL_RISE: G(2g) <= that."""
     width = math.sqrt(2.0 * max(math.pi - amplitude, 0.0) / amplitude)
     sin_a, cos_a = math.sin(amplitude), math.cos(amplitude)
+    half = (math.sin(0.5 * amplitude), math.cos(0.5 * amplitude))
+    u_last = xi * _PANEL_RISE_EXPM1  # u = xi expm1(G): G <= _PANEL_RISE
     total, g, j = 0.0, 0.25 * math.pi, 0
     while True:
         last = not g > width or g < 1e-300  # NaN width (no amplitude): one panel
+        if last and g >= 1e-300:  # the rise at the panel's far end t = 2g, r = sin(g)
+            last = not _paper_u_from_turning_point(amplitude, sin_a, cos_a, half,
+                                                   math.sin(g), k, xi) > u_last
         panel = 0.0
         for i in range(_GL_X.shape[0]):
             if j < _PANEL_HALF_T.shape[1]:
@@ -477,7 +499,7 @@ def paper_half_period(v, k, xi, amplitude):
             else:
                 half_t = _panel_half_t(g, _GL_X[i], last)
                 r, q = math.sin(half_t), math.cos(half_t)
-            u = _paper_u_from_turning_point(amplitude, sin_a, cos_a, r, k, xi)
+            u = _paper_u_from_turning_point(amplitude, sin_a, cos_a, half, r, k, xi)
             panel += _GL_W[i] * 2.0 * r * q / math.sqrt(max(u, 1e-300))  # cos s = sin t
         total += (g if last else 0.5 * g) * panel
         if last:
@@ -487,17 +509,20 @@ def paper_half_period(v, k, xi, amplitude):
 
 
 @njit(**INLINE_OPTIONS)
-def _paper_u_from_turning_point(amplitude, sin_a, cos_a, r, k, xi):
+def _paper_u_from_turning_point(amplitude, sin_a, cos_a, half, r, k, xi):
     """u at the node whose (A - psi)/2 = A r^2 (r = sin(t/2); see paper_half_period):
     g(X_A) - g(X) = -d X/(1 + xi X) - log1p_excess(y)/xi^2, d = X_A - X, y = xi d/(1 + xi X),
-    each term free of cancellation."""
-    gap = amplitude * r * r  # (A - psi)/2
-    sin_g, cos_g = math.sin(gap), math.cos(gap)
-    cos_psi = cos_a * (1.0 - 2.0 * sin_g * sin_g) + sin_a * 2.0 * sin_g * cos_g
-    x = k * k + 1.0 + 2.0 * k * cos_psi
+    each term free of cancellation. X = (1 - k)^2 + 4k cos^2(psi/2), cos(psi/2) = cos(A/2 -
+    gap) from half = (sin, cos)(A/2): sums of positive terms, where k^2 + 1 + 2k cos psi
+    cancelled next to a saddle at k ~ 1 (X ~ 0; tau1 was 1.2e-11 off)."""
+    gap = amplitude * r * r  # (A - psi)/2, in [0, pi/2)
+    sin_g, cos_g = sincos_quadrant(gap)
+    cos_half = half[1] * cos_g + half[0] * sin_g
+    x = (1.0 - k) ** 2 + 4.0 * k * cos_half * cos_half
     d = -4.0 * k * (sin_a * cos_g - cos_a * sin_g) * sin_g
-    y = xi * d / (1.0 + xi * x)
-    return xi * math.expm1(-d * x / (1.0 + xi * x) - log1p_excess(y) / (xi * xi))
+    q = 1.0 / (1.0 + xi * x)
+    inverse_xi2 = 1.0 / (xi * xi)  # the same at every node: hoisted out of the loop
+    return xi * math.expm1(-d * x * q - log1p_excess(xi * d * q) * inverse_xi2)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -522,6 +547,9 @@ def _paper_peak_slope(psi, data):
 
 _peak_slope_root = make_illinois(_paper_peak_slope)
 
+#: below this |slope| the scan's recurrence cosine (error ~1e-14) does not decide its sign
+_SCAN_SIGN = 1e-10
+
 
 @njit(**KERNEL_OPTIONS)
 def paper_peak_acceleration(v, k, xi, amplitude):
@@ -529,17 +557,32 @@ def paper_peak_acceleration(v, k, xi, amplitude):
     at the turning point A, or where the slope (_paper_peak_slope, positive at psi = 0)
     turns negative: its sign at 32 points, and each change by Illinois to 1e-15 A. A root
     in closed form, so the peak is exact to round-off; a golden-section search on the value
-    (70 evaluations with an exponential in each) cost 6.9 us of a design's 16.7 (0.8 now)."""
+    (70 evaluations with an exponential in each) cost 6.9 us of a design's 16.7 (0.8 now).
+
+    The scan needs only cos psi (sin^2 psi = 1 - cos^2 psi), stepped by the cosines'
+    three-term recurrence instead of a sine and a cosine at every point (0.6 us of a
+    cycle's 3.3); where that value is within _SCAN_SIGN of 0, and at a change's bracket,
+    the slope is evaluated exactly, so the signs and the roots are those of the plain scan."""
     data, slope = (v, k, xi), (k, xi)
     best = _paper_flight_acceleration(amplitude, data)
     n = 32
+    step = amplitude / n
+    two_cos_step = 2.0 * math.cos(step)
+    c_prev, c = math.cos(-step), 1.0  # cos of the point before lo, and of lo
     lo, before = 0.0, 1.0
     for j in range(1, n + 1):
         hi = amplitude * j / n
-        after = _paper_peak_slope(hi, slope)
+        c_prev, c = c, two_cos_step * c - c_prev
+        x = k * k + 1.0 + 2.0 * k * c
+        after = c - 2.0 * k * (1.0 - c * c) * (1.0 / x + (x - xi) / (1.0 + xi * x))
+        if abs(after) < _SCAN_SIGN:
+            after = _paper_peak_slope(hi, slope)
         if before > 0.0 and not after > 0.0:
             psi = hi
-            if after < 0.0:
+            after = _paper_peak_slope(hi, slope)
+            if j > 1:
+                before = _paper_peak_slope(lo, slope)
+            if after < 0.0 and before > 0.0:
                 psi, _ = _peak_slope_root(slope, lo, hi, before, after, 1e-15 * amplitude)
             best = max(best, _paper_flight_acceleration(psi, data))
         lo, before = hi, after
