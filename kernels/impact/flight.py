@@ -46,8 +46,11 @@ Flight = namedtuple("Flight", ["outcome", "event", "t", "y", "f", "data", "ampli
                                "peak", "cost"])
 
 
-def make_flight(system):
-    """The flight loop of a system (see the module docstring)."""
+def make_flight(system, refinable=True):
+    """The flight loop of a system (see the module docstring). ``refinable=False``: a loop
+    that is never asked to refine (the variational flights) is built without the turning
+    point's and the peak's refinements, which numba would otherwise compile for it on the
+    augmented state (the stability example's first run 8 % shorter)."""
     rhs, monitor = system.rhs, system.monitor
     values, rates, on_event, start_gap = (system.event_values, system.event_rates,
                                           system.on_event, system.start_gap)
@@ -134,6 +137,19 @@ def make_flight(system):
             if a > best:
                 best, where = a, s
         return best, where - spacing, where + spacing
+
+    if not refinable:  # stand-ins, never called: refine is False in such a loop
+        @njit(**INNER_OPTIONS)
+        def turning_angle(t, h, y, f, y1, f1, p, settings):
+            return 0.0
+
+        @njit(**INNER_OPTIONS)
+        def step_peak(t, h, y, f, y1, f1, upto):
+            return -1.0, 0.0, 0.0
+
+        @njit(**INNER_OPTIONS)
+        def golden_acceleration(data, lo, hi, stop):
+            return 0.0
 
     @njit(**INNER_OPTIONS)
     def flight(t0, y0, p, data, settings, refine):

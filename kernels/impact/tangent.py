@@ -104,7 +104,7 @@ def make_variational(model, n):
         return z[0], f[0], f[1]
 
     fly, _ = make_flight(System(rhs, scales, values, rates, (1,), on_event, start_gap,
-                                monitor))
+                                monitor), refinable=False)
 
     @njit(**INNER_OPTIONS)
     def flow_derivative(t0, y0, t1, p, settings):
