@@ -343,8 +343,9 @@ def test_P_O9_jacobi_integral_of_the_rigid_pendulum():
 def test_the_closed_form_peak_acceleration_is_exact_to_round_off():
     """max |psi''| over the flight (P-O4) against mpmath at 30 digits (a dense sample of the
     value, then the root of its numerical log-derivative next to the best sample: a
-    different algorithm from the kernel's closed-form slope) at 20 random designs: k in
-    (0.05, 5), xi from 0.01 to 20, launch speeds up to 1e-13 of v_crit. Within 2e-12 (seen:
+    different algorithm from the kernel's closed-form slope) at 32 random designs: k in
+    (0.05, 5), xi from 0.01 to 20, launch speeds up to 1e-13 of v_crit; a quarter within
+    0.1 of k = 1 (X ~ 0 next to the saddle) and a quarter with xi < 0.1. Within 2e-12 (seen:
     8e-13, where xi ~ 0.01 makes |psi''| an exponential of a difference of numbers ~ 1/xi:
     a golden-section search on the value was as far off, biased upwards by that noise)."""
     import mpmath as mp
@@ -372,8 +373,12 @@ def test_the_closed_form_peak_acceleration_is_exact_to_round_off():
         return float(best)
 
     rng = np.random.default_rng(2411)
-    for _ in range(20):
+    for j in range(32):
         k, xi = rng.uniform(0.05, 5.0), 10 ** rng.uniform(-2.0, 1.3)
+        if j % 4 == 1:
+            k = 1.0 + rng.choice([-1.0, 1.0]) * 10 ** rng.uniform(-6.0, -1.0)
+        elif j % 4 == 2:
+            xi = 10 ** rng.uniform(-2.0, -1.0)
         v = (1.0 - 10 ** rng.uniform(-13.0, -0.01)) * pm.paper_critical_speed(k, xi)
         amplitude = pm.paper_amplitude(v, k, xi)
         assert pm.paper_peak_acceleration(v, k, xi, amplitude) == pytest.approx(
