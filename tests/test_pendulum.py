@@ -390,7 +390,7 @@ def test_the_peak_accelerations_scan_finds_the_roots_of_the_exact_slope():
     points with the slope evaluated from math.cos and math.sin in Python, brackets each + to
     - change with brentq (SciPy) and takes the largest |psi''| there and at A. 3,000 random
     designs (k in (0.05, 5), a quarter within 0.1 of k = 1, xi from 0.01 to 20, launch
-    speeds up to 1e-13 of v_crit): equal to 1e-14 (seen: 2e-16; the value is stationary at
+    speeds up to 1e-13 of v_crit): equal to 1e-14 (seen: 7e-16; the value is stationary at
     a root). A recurrence or sign threshold that loses a change finds another maximum."""
     from scipy.optimize import brentq
 
