@@ -319,6 +319,7 @@ def kinetic_energy(y, p):
 
 #: 1/(2j + 3): the series of log1p_excess
 _EXCESS_SERIES = np.array([1.0 / (2 * j + 3) for j in range(18)])
+assert _EXCESS_SERIES.shape[0] % 2 == 0  # log1p_excess takes the terms in pairs
 
 
 @njit(**KERNEL_OPTIONS)
@@ -539,10 +540,18 @@ def _paper_peak_slope(psi, data):
     (v^2 + xi) e^(g0 - g(X)), |psi''| = k (v^2 + xi) e^g0 X e^-g(X) sin(psi)/(1 + xi X),
     whose logarithmic slope is cot psi - 2k sin psi (1/X + (X - xi)/(1 + xi X)): the same
     for every launch speed v, smooth, and no exponential in it."""
-    k, xi = data
-    x = k * k + 1.0 + 2.0 * k * math.cos(psi)
     s = math.sin(psi)
-    return math.cos(psi) - 2.0 * k * s * s * (1.0 / x + (x - xi) / (1.0 + xi * x))
+    return _peak_slope_of_cosine(math.cos(psi), s, s, data)
+
+
+@njit(**INLINE_OPTIONS)
+def _peak_slope_of_cosine(c, sin_a, sin_b, data):
+    """_paper_peak_slope from c = cos psi, with sin^2 psi given as the product sin_a sin_b
+    (sin psi twice, or 1 - c^2 and 1 for the scan's recurrence): one formula, each caller
+    keeping its own rounding."""
+    k, xi = data
+    x = k * k + 1.0 + 2.0 * k * c
+    return c - 2.0 * k * sin_a * sin_b * (1.0 / x + (x - xi) / (1.0 + xi * x))
 
 
 _peak_slope_root = make_illinois(_paper_peak_slope)
@@ -566,15 +575,13 @@ def paper_peak_acceleration(v, k, xi, amplitude):
     data, slope = (v, k, xi), (k, xi)
     best = _paper_flight_acceleration(amplitude, data)
     n = 32
-    step = amplitude / n
-    two_cos_step = 2.0 * math.cos(step)
-    c_prev, c = math.cos(-step), 1.0  # cos of the point before lo, and of lo
+    cos_step = math.cos(amplitude / n)
+    c_prev, c = cos_step, 1.0  # cos of the point before lo (at -step), and of lo
     lo, before = 0.0, 1.0
     for j in range(1, n + 1):
         hi = amplitude * j / n
-        c_prev, c = c, two_cos_step * c - c_prev
-        x = k * k + 1.0 + 2.0 * k * c
-        after = c - 2.0 * k * (1.0 - c * c) * (1.0 / x + (x - xi) / (1.0 + xi * x))
+        c_prev, c = c, 2.0 * cos_step * c - c_prev
+        after = _peak_slope_of_cosine(c, 1.0 - c * c, 1.0, slope)
         if abs(after) < _SCAN_SIGN:
             after = _paper_peak_slope(hi, slope)
         if before > 0.0 and not after > 0.0:
