@@ -72,7 +72,7 @@ def kernel_loop():
                     h = next_step(h, err, rejected, prev)
                     prev, rejected = err, False
                 else:
-                    h = next_step(h, err, True)
+                    h = next_step(h, err, True, prev)
                     rejected = True
             out[i] = y[0] + y[1]
         return steps

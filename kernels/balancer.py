@@ -105,7 +105,7 @@ TWO_PI = 2.0 * math.pi
 def rocker_angle(theta, l0, l1, l2, l3, sigma):
     """Absolute rocker angle beta(theta) [rad] from the loop closure (NaN if it cannot close)."""
     c1, s1, c2, s2, c3, s3, d2, root = closure_vectors(
-        math.sin(0.5 * theta), math.cos(0.5 * theta), l0, l1, l2, l3, sigma)
+        math.sin(0.5 * theta), math.cos(0.5 * theta), l0, l1, l2, l3, sigma, 0.0)
     return math.atan2(s3, c3)
 
 
@@ -114,7 +114,7 @@ def _extreme(theta, l0, l1, l2, l3, sigma):
     """Newton on u31(theta) = 0 from theta: a rocker dead position (the swing's ends)."""
     for _ in range(30):
         c1, s1, c2, s2, c3, s3, u21, u, du21, du = vector_kinematics(theta, l0, l1, l2, l3,
-                                                                       sigma)
+                                                                       sigma, 0.0)
         step = u / du
         theta -= step
         if abs(step) < 1e-15:
@@ -378,15 +378,15 @@ def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
         vals[RIGID_ACCELERATION, j] = v0
         vals[INVARIANT_FREE, j], vals[INVARIANT_BALANCED, j] = v1, v2 + static_dev
         vals[MASS_ACCELERATION_FREE, j], vals[MASS_ACCELERATION_BALANCED, j] = v3, v4
-    eps_rigid = _refine_peak(vals[RIGID_ACCELERATION], zr, zi, 0.0, m, 2)
-    m_free = _refine_peak(vals[INVARIANT_FREE], ir, ii, 0.0, m, 0)
-    m_dev = _refine_peak(vals[INVARIANT_BALANCED], jr, ji, static_dev, m, 0)
+    eps_rigid = _refine_peak(vals[RIGID_ACCELERATION], zr, zi, 0.0, m, int(2))
+    m_free = _refine_peak(vals[INVARIANT_FREE], ir, ii, 0.0, m, int(0))
+    m_dev = _refine_peak(vals[INVARIANT_BALANCED], jr, ji, static_dev, m, int(0))
     out[O.moment_invariant_peak_free], out[O.moment_invariant_peak_balanced] = m_free, m_dev
     out[O.balancing_coefficient] = m_free / m_dev
     out[O.dynamic_coefficient_free] = _refine_peak(vals[MASS_ACCELERATION_FREE], nr, ni, 0.0,
-                                                   m, 2) / eps_rigid
+                                                   m, int(2)) / eps_rigid
     out[O.dynamic_coefficient_balanced] = _refine_peak(vals[MASS_ACCELERATION_BALANCED], dr, di,
-                                                       0.0, m, 2) / eps_rigid
+                                                       0.0, m, int(2)) / eps_rigid
     out[O.acceleration_invariant_rigid] = eps_rigid
     for k in range(out.shape[0]):
         if not math.isfinite(out[k]):

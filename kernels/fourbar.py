@@ -209,7 +209,7 @@ def transmission_angle(phi1, l0, l1, l2, l3, tol):
 @njit(**KERNEL_OPTIONS)
 def transmission_angle_half(sh, ch, l0, l1, l2, l3, tol):
     """transmission_angle from sin and cos of phi1/2 (exact 0/1 at the dead centres)."""
-    d2, p, q = dyad_factors_half(sh, ch, l0, l1, l2, l3)
+    d2, p, q = dyad_factors_half(sh, ch, l0, l1, l2, l3, 0.0)
     slack = tol * (l0 + l1 + l2 + l3) ** 2
     if p < -slack or q < -slack:
         return math.nan

@@ -23,7 +23,7 @@ from kernels import KERNEL_OPTIONS
 from kernels.crank_rocker import impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol)
-from kernels.extrema import clustered_points, peak_search
+from kernels.extrema import CLUSTER, clustered_points, peak_search
 from kernels.fourbar import (
     CHANGE_POINT_A,
     CHANGE_POINT_B,
@@ -410,7 +410,8 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     lows, highs = cycle_pieces(kind, count, window)
     best = np.full(N_PEAKS, -math.inf)
     for piece in range(lows.shape[0]):
-        xs = clustered_points(lows[piece], highs[piece], max(3, n_peak // lows.shape[0]))
+        xs = clustered_points(lows[piece], highs[piece], max(3, n_peak // lows.shape[0]),
+                              int(CLUSTER))
         values = np.empty((N_PEAKS, xs.shape[0]))
         for j in range(xs.shape[0]):
             if not _joint_forces(xs[j], pr, sigma, res, tol, gx, gy):

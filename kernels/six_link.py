@@ -200,7 +200,7 @@ def _cycle_peaks(data, n_samples, impacts, peak):
         if b - a <= END_MARGIN:
             continue
         n = max(8, int(n_samples * (b - a) / (2.0 * TWO_PI)))
-        xs = clustered_points(a, b, n, CLUSTER_DEPTH)
+        xs = clustered_points(a, b, n, int(CLUSTER_DEPTH))
         u51 = np.empty(xs.shape[0])
         du51 = np.empty(xs.shape[0])
         for j in range(xs.shape[0]):
@@ -234,10 +234,10 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
     out[O.restitution_kinematic] = (1.0 - gamma2) / (1.0 + gamma2)
     out[O.transfer_stage1_low] = (1.0 - gamma1) / (1.0 - lam6)
     out[O.transfer_stage1_high] = (1.0 + gamma1) / (1.0 - lam6)
-    sigma2 = impact_branch(CHANGE_POINT_B, direction)  # link 3 turns with the crank
+    sigma2 = impact_branch(int(CHANGE_POINT_B), direction)  # link 3 turns with the crank
     out[O.assembly_branch_stage2] = sigma2
     offset = delta - beta
-    before53, after53 = branch_values(CHANGE_POINT_B, mu6, gamma2, sigma2, direction)
+    before53, after53 = branch_values(int(CHANGE_POINT_B), mu6, gamma2, sigma2, direction)
 
     # the two impacts of a 4 pi cycle: phi3 + delta - beta = 2 pi k (phi3 grows by 4 pi)
     start = math.pi + offset  # phi3 = pi at the node phi1 = 0

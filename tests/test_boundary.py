@@ -204,3 +204,25 @@ def test_cached_kernels_compiled_apart_run_their_own_closures_side_by_side(tmp_p
     assert list(tmp_path.rglob("*plus_one*.nbi")) and list(tmp_path.rglob("*plus_two*.nbi"))
     assert run("plus_one(0.0), plus_two(0.0)") == ["2.0", "4.0"]
     assert run("plus_two(0.0), plus_one(0.0)") == ["4.0", "2.0"]
+
+
+def test_every_kernel_function_compiles_once(tmp_path):
+    """A constant argument in a call between kernels (a literal 0, True, or an omitted
+    default) makes numba compile the callee once more for that type (kernels/__init__.py):
+    the stability example compiled its whole driver twice. In a fresh process and cache,
+    the cheap examples and the rigid pendulum on the blade with the tangent and two starts
+    (the transient's and the cycle's paths, the attractor starts) compile each function
+    once; the planted pair in tests/compile_once.py shows that a duplicate is seen."""
+    import os
+
+    examples = KERNELS.parent / "sweep" / "examples"
+    paths = [str(examples / f"{name}.toml") for name in (
+        "crank_rocker", "linkage_forces", "six_link", "spring_balancer", "rotary_pendulum")]
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    out = subprocess.run([sys.executable, "-m", "tests.compile_once", *paths],
+                         capture_output=True, text=True, check=True, cwd=KERNELS.parent,
+                         env=env)
+    twice = json.loads(out.stdout.splitlines()[-1])
+    planted = [calls for calls in twice if calls[0][0] == "_planted_inner"]
+    assert len(planted) == 1 and len(planted[0]) == 2, twice
+    assert [calls for calls in twice if calls[0][0] != "_planted_inner"] == []

@@ -166,7 +166,7 @@ def make_flight(system, refinable=True):
         # with refine, where |accel| is largest: the step, its end state, and a bracket
         # (from the step's start) around its largest sample, interior or at the end
         best, best_value = (y, f, y, f, 0.0, t, 0.0, 0.0), abs(accel)
-        after_reject = False
+        after_reject = bool(False)
         err_prev = 1.0
         crossings, memo = 0, (math.nan, math.nan)  # zero crossings of the angle, coast's memo
         while steps + rejected < settings.max_steps:
@@ -176,8 +176,8 @@ def make_flight(system, refinable=True):
             y1, f1, err = step(method, y, f, h, p, rtol, atol)
             if not err <= 1.0:  # NaN too: a step into a blow-up is rejected, not taken
                 rejected += 1
-                h = next_step(h, err, True)
-                after_reject = True
+                after_reject = bool(True)
+                h = next_step(h, err, after_reject, err_prev)
                 if h < 1e-14 * max(1.0, abs(t)):
                     return Flight(FLIGHT_UNDERFLOW, -1, t, y, f, data, amplitude, peak,
                                   Counters(steps, rejected, events))
@@ -238,7 +238,7 @@ def make_flight(system, refinable=True):
             t, y, f, angle = t + h, y1, f1, angle1
             h, err_prev = accepted_step_size(method, h, settings.dt, err, after_reject,
                                              err_prev)
-            after_reject = False
+            after_reject = bool(False)
         return Flight(FLIGHT_MAX_STEPS, -1, t, y, f, data, amplitude, peak,
                       Counters(steps, rejected, events))
 

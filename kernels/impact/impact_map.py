@@ -417,7 +417,7 @@ def make_impact_map(c, jump_early, stability=False):
                 break
             # an affine map of slope r = 0 is constant: its first section is the cycle
             constant = jump_early and r == 0.0
-            # bool(): a literal would compile every function below twice (True, False)
+            # bool(): a literal would compile every function below twice (kernels/__init__.py)
             refine = bool(constant)
             if secant and count == jumped_at + 1:
                 # one section after a jump to x (row count - 2), at P(x): Broyden's step
@@ -475,7 +475,7 @@ def make_impact_map(c, jump_early, stability=False):
                 refine = jumped = True
             speed = striker_speed(t, y, data, p)
             t_start, phi_start = t, rotor_angle(t, y)
-            s = section(t, y, data, p, r, settings, refine, no_tangent, 0)
+            s = section(t, y, data, p, r, settings, refine, no_tangent, int(0))
             cost = add(cost, s.cost)
             if s.outcome != SEQUENCE_CYCLE:
                 return Steady(s.outcome, 0, s.chatter, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, count,

@@ -76,7 +76,7 @@ def initial_step(method, dt, speed, rtol):
 
 
 @njit(**INNER_OPTIONS)
-def next_step(h, err, after_reject, err_prev=1.0):
+def next_step(h, err, after_reject, err_prev):
     """Step-size control of DOPRI5: the PI controller 0.9 err^-0.17 err_prev^0.04 (Hairer's
     DOPRI5 with beta = 0.04; it damps the accept/reject see-saw where the step must keep
     shrinking), within [0.2, 5]; after a rejection only 0.9 err^(-1/5) and no growth

@@ -311,7 +311,7 @@ def make_tracker(c, n):
 
 @njit(**INLINE_OPTIONS)
 def _no_start(t, y, data, basis):
-    return 0, np.zeros(MAX_SECTION_DIMENSION, np.int64)
+    return int(0), np.zeros(MAX_SECTION_DIMENSION, np.int64)  # int(): see kernels/__init__.py
 
 
 @njit(**INLINE_OPTIONS)

@@ -76,7 +76,7 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
             for j in range(row.shape[0]):
                 row[j] = math.nan
             p, data, r = parameters(case), data_of(case), case[C.R]
-            s = steady(p, data, r, settings, max_impacts, tol, log, 0)
+            s = steady(p, data, r, settings, max_impacts, tol, log, int(0))
             row[ROW.outcome] = s.outcome
             cost = s.cost
             if starts > 1:
@@ -85,7 +85,7 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
                 seen[0, 0], seen[0, 1], seen[0, 2] = s.outcome, s.period, 1.0 if s.chatter else 0.0
                 for i in range(n_keys):
                     seen[0, 3 + i] = s.key[i]
-                distinct, same = 1, 1
+                distinct, same = int(1), int(1)
                 for j in range(1, starts):
                     other = steady(p, data, r, settings, max_impacts, tol, log, j)
                     cost = add(cost, other.cost)
@@ -93,7 +93,7 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
                     seen[distinct, 2] = 1.0 if other.chatter else 0.0
                     for i in range(n_keys):
                         seen[distinct, 3 + i] = other.key[i]
-                    if _same_attractor(seen, 0, distinct, n_keys):
+                    if _same_attractor(seen, int(0), distinct, n_keys):
                         same += 1
                     new = True
                     for i in range(distinct):

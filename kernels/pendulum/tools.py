@@ -175,7 +175,7 @@ def rotor_stop(model):
         """Start 0: at rest on the stop, the rotor at its starting speed: the first impact
         at once. Start j: arriving at the stop with psi' = 2 (1 + k) x_j (Halton point in
         base 2; the steady arrival speed at R = 0 is 1 + k)."""
-        speed = 2.0 * (1.0 + data[1]) * radical_inverse(start, 2)
+        speed = 2.0 * (1.0 + data[1]) * radical_inverse(start, int(2))
         t, y = compose(0.0, 0.0, p[-1], 0.0, speed)  # driven models ignore the rotor speed
         return t, y, data
 
@@ -586,8 +586,8 @@ def lab_window(model):
         w = rotor_speed(compose(0.0, 0.0, p[-1], 0.0, 0.0)[1])
         psi, dpsi = 0.0, 0.0
         if start > 0:
-            psi = window * (2.0 * radical_inverse(start, 3) - 1.0)
-            dpsi = (2.0 * radical_inverse(start, 2) - 1.0) * w / h_ratio(psi, k)
+            psi = window * (2.0 * radical_inverse(start, int(3)) - 1.0)
+            dpsi = (2.0 * radical_inverse(start, int(2)) - 1.0) * w / h_ratio(psi, k)
         phi1 = 0.0 - beta(psi, k)  # 0.0, not -0.0, at rest
         t, y = compose(phi1, phi1, w, psi, dpsi)
         return t, y, (lower, window, k, 0.0, 1.0)
