@@ -16,7 +16,7 @@ from numba import njit
 from kernels import INLINE_OPTIONS
 from kernels.impact import System
 from kernels.impact.events import ILLINOIS_ITERATIONS, make_illinois
-from kernels.impact.flight import make_flight
+from kernels.impact.flight import make_flight, make_timed_flight
 from kernels.impact.impact_map import (aitken, classify_period, fixed_point_jump,
                                        impacts_past_jump, secant_step)
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
@@ -204,6 +204,57 @@ def test_the_step_size_underflows_at_a_blowup():
     # RK4 has no error estimate: it steps into the blow-up, and the flight ends there
     fl = blowup_flight(0.0, (1.0,), settings("rk4", dt=0.01))
     assert fl.outcome == FLIGHT_NONFINITE and 0.9 < fl.t < 1.1 and np.isfinite(fl.y[0])
+
+
+_line_timed = make_timed_flight(line_rhs, relative_scales)
+_blowup_timed = make_timed_flight(blowup_rhs, relative_scales)
+
+
+@njit
+def line_timed(t0, y0, t1, p, s):
+    return _line_timed(t0, y0, t1, p, s)
+
+
+@njit
+def blowup_timed(t1, s):
+    return _blowup_timed(0.0, (1.0,), t1, 0.0, s)
+
+
+def test_a_timed_flight_lands_on_its_end_time_and_matches_the_oscillator():
+    """The timed flight (the variational equations' integration to a flight's located end)
+    at random end times: the oscillator from (cos t0, -sin t0) at t0 to t1 against (cos t1,
+    -sin t1), to its tolerance with DOPRI5 and to RK4's global error at dt = 1e-3 (h^4/120
+    per unit time, below the round-off of span/dt steps). The end time is the last step's end, not an overshoot interpolated
+    back: at rtol 1e-13 the error is round-off's (a step past t1 would show as a phase
+    error of that step's interpolation)."""
+    rng = np.random.default_rng(7)
+    for t0, span in zip(rng.uniform(-3.0, 3.0, 40), rng.uniform(1e-9, 20.0, 40)):
+        t1 = t0 + span
+        start = (math.cos(t0), -math.sin(t0))
+        for s, tol in ((settings(rtol=1e-13, atol=1e-15), 5e-14 * max(1.0, span)),
+                       (settings("rk4", dt=1e-3), 4e-16 * span / 1e-3 + 1e-14)):
+            reached, y = line_timed(t0, start, t1, OSCILLATOR, s)
+            assert reached
+            assert abs(y[0] - math.cos(t1)) <= tol and abs(y[1] + math.sin(t1)) <= tol, (
+                t0, span, y)
+
+
+def test_a_timed_flight_of_no_length_is_the_identity_and_a_backward_one_fails():
+    start = (0.3, -0.7)
+    assert line_timed(1.5, start, 1.5, OSCILLATOR, settings()) == (True, start)
+    reached, _ = line_timed(1.5, start, 1.4, OSCILLATOR, settings())
+    assert not reached
+
+
+def test_a_timed_flight_into_a_blowup_or_past_its_budget_fails():
+    """y' = y^2 from y = 1 blows up at t = 1: an end time beyond it is not reached (DOPRI5's
+    steps underflow; RK4 steps into non-finite values); one before it is, at y = 1/(1-t).
+    A budget of 5 steps does not reach t = 0.9."""
+    assert not blowup_timed(1.5, settings(rtol=1e-8, atol=1e-10))[0]
+    assert not blowup_timed(1.5, settings("rk4", dt=0.01))[0]
+    reached, y = blowup_timed(0.9, settings(rtol=1e-12, atol=1e-14))
+    assert reached and y[0] == pytest.approx(10.0, rel=1e-10)
+    assert not blowup_timed(0.9, settings(max_steps=5))[0]
 
 
 @njit(**INLINE_OPTIONS)

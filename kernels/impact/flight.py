@@ -19,6 +19,10 @@ returns ``flight(t, y, p, data, settings, refine) -> Flight``. Per accepted step
   one just after the impact (5.7e-4 low at rtol 1e-6 on another).
 
 Transient flights of an impact sequence run with ``refine`` off: they need only their end.
+
+``make_timed_flight(rhs, scales)`` is the same steps and step-size control to a time known
+beforehand (the variational equations through a flight already located), the last step
+cut to land on it: no event search, nothing monitored.
 """
 
 import math
@@ -46,11 +50,8 @@ Flight = namedtuple("Flight", ["outcome", "event", "t", "y", "f", "data", "ampli
                                "peak", "cost"])
 
 
-def make_flight(system, refinable=True):
-    """The flight loop of a system (see the module docstring). ``refinable=False``: a loop
-    that is never asked to refine (the variational flights) is built without the turning
-    point's and the peak's refinements, which numba would otherwise compile for it on the
-    augmented state (the stability example's first run 8 % shorter)."""
+def make_flight(system):
+    """The flight loop of a system (see the module docstring)."""
     rhs, monitor = system.rhs, system.monitor
     values, rates, on_event, start_gap = (system.event_values, system.event_rates,
                                           system.on_event, system.start_gap)
@@ -137,19 +138,6 @@ def make_flight(system, refinable=True):
             if a > best:
                 best, where = a, s
         return best, where - spacing, where + spacing
-
-    if not refinable:  # stand-ins, never called: refine is False in such a loop
-        @njit(**INNER_OPTIONS)
-        def turning_angle(t, h, y, f, y1, f1, p, settings):
-            return 0.0
-
-        @njit(**INNER_OPTIONS)
-        def step_peak(t, h, y, f, y1, f1, upto):
-            return -1.0, 0.0, 0.0
-
-        @njit(**INNER_OPTIONS)
-        def golden_acceleration(data, lo, hi, stop):
-            return 0.0
 
     @njit(**INNER_OPTIONS)
     def flight(t0, y0, p, data, settings, refine):
@@ -243,3 +231,51 @@ def make_flight(system, refinable=True):
                       Counters(steps, rejected, events))
 
     return flight, step
+
+
+def make_timed_flight(rhs, scales):
+    """``timed_flight(t0, y0, t1, p, settings) -> (reached, y)``: the state at a known time
+    t1 from y0 at t0, by the flight loop's steps and step-size control, the last step cut
+    to land on t1. For an integration whose end is known (the variational equations
+    through a flight whose end was located already): no event search, nothing monitored.
+    ``reached`` is False where a step underflowed, the state stopped being finite, or the
+    step budget ran out."""
+    step = make_stepper(rhs, scales)
+
+    @njit(**INNER_OPTIONS)
+    def timed_flight(t0, y0, t1, p, settings):
+        method, rtol, atol = settings.method, settings.rtol, settings.atol
+        t, y = t0, y0
+        if not t1 > t0:
+            return t1 == t0, y0
+        f = rhs(y, p)
+        h = initial_step(method, settings.dt, f[0], rtol)
+        after_reject = bool(False)
+        err_prev = 1.0
+        steps = 0
+        while steps < settings.max_steps:
+            last = h >= t1 - t
+            if last:
+                h = t1 - t
+            y1, f1, err = step(method, y, f, h, p, rtol, atol)
+            steps += 1
+            if not err <= 1.0:  # NaN too
+                after_reject = bool(True)
+                h = next_step(h, err, after_reject, err_prev)
+                if h < 1e-14 * max(1.0, abs(t)):
+                    return False, y
+                continue
+            finite = True
+            for v in y1:
+                finite = finite and math.isfinite(v)
+            if not finite:  # RK4 has no error estimate to reject it
+                return False, y
+            if last:
+                return True, y1
+            t, y, f = t + h, y1, f1
+            h, err_prev = accepted_step_size(method, h, settings.dt, err, after_reject,
+                                             err_prev)
+            after_reject = bool(False)
+        return False, y
+
+    return timed_flight

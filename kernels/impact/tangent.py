@@ -7,11 +7,12 @@ dphi1 = dt and dphi1' = 0; the model converts, ``tangent_state`` / ``tangent_coo
 A cycle's perturbations are the columns of a 5 x d matrix, one per section coordinate.
 
 - Along a flight from (t0, y0) to the event at t1: the variational equations dY/dt = Df Y,
-  Y(t0) = I, integrated with the state by the same Runge-Kutta steps (the core's flight
-  loop on the augmented state, stopped at t1 by an event on the time, its error control
-  covering Y); at fixed time the perturbation is Y dy0 - f(t1) dt0 (an autonomous flow
-  started dt0 later), and the event moves by dt1 = -g . dy / (dg/dt) (the saltation of the
-  event time; g's gradient from the tool, ``event_gradient``).
+  Y(t0) = I, integrated with the state by the same Runge-Kutta steps and step-size control
+  (flight.make_timed_flight on the augmented state, its error control covering Y, the last
+  step cut to land on t1, which the flight located already); at fixed time the
+  perturbation is Y dy0 - f(t1) dt0 (an autonomous flow started dt0 later), and the event
+  moves by dt1 = -g . dy / (dg/dt) (the saltation of the event time; g's gradient from the
+  tool, ``event_gradient``).
 - At an impact: the derivative of Newton's law v+ = v - (1 + R) x (J v)/(J x) (x = M^-1 J^T)
   with respect to the velocities and, through J and M, to psi.
 - At a chatter accumulated into a contact (the Zeno guard's jump to the accumulation
@@ -36,9 +37,7 @@ import numpy as np
 from numba import njit
 
 from kernels import INNER_OPTIONS, INLINE_OPTIONS
-from kernels.impact import System
-from kernels.impact.flight import make_flight
-from kernels.impact.outcomes import FLIGHT_EVENT
+from kernels.impact.flight import make_timed_flight
 from kernels.impact.tuples import relative_scales
 
 #: the rows of a perturbation's coordinates
@@ -83,33 +82,12 @@ def make_variational(model, n):
                         ns)
     matrix = _generated("matrix", "z", [f"return {tangent}"], ns)
 
-    @njit(**INLINE_OPTIONS)
-    def values(t, z, data):
-        return (t - data,)
-
-    @njit(**INLINE_OPTIONS)
-    def rates(t, z, dz, data):
-        return (1.0,)
-
-    @njit(**INLINE_OPTIONS)
-    def on_event(e, t, z, f, data, p):
-        return True, data
-
-    @njit(**INLINE_OPTIONS)
-    def start_gap(t, z, f, data, p):
-        return 1.0, 0.0  # no restart on a surface: no first-step cap
-
-    @njit(**INLINE_OPTIONS)
-    def monitor(t, z, f):
-        return z[0], f[0], f[1]
-
-    fly, _ = make_flight(System(rhs, scales, values, rates, (1,), on_event, start_gap,
-                                monitor), refinable=False)
+    fly = make_timed_flight(rhs, scales)
 
     @njit(**INNER_OPTIONS)
     def flow_derivative(t0, y0, t1, p, settings):
-        fl = fly(t0, extend(y0), p, t1, settings, False)
-        return fl.outcome == FLIGHT_EVENT, matrix(fl.y)
+        reached, z = fly(t0, extend(y0), t1, p, settings)
+        return reached, matrix(z)
 
     return flow_derivative
 
