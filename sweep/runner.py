@@ -78,12 +78,29 @@ def compile_first(sweep, announce: bool) -> None:
             compiling.result(timeout=COMPILE_NOTICE_AFTER)
             return
         except cf.TimeoutError:
-            if announce:
-                print("compiling kernels (first run only) ...", file=sys.stderr, flush=True)
-        compiling.result()
-    if announce:
-        print(f"compiled in {time.perf_counter() - started:.0f} s", file=sys.stderr,
-              flush=True)
+            if not announce:
+                compiling.result()
+                return
+        _wait_with_clock(compiling, "compiling kernels (first run only; cached for later "
+                                    "runs)")
+    print(f"compiled in {time.perf_counter() - started:.0f} s", file=sys.stderr, flush=True)
+
+
+def _wait_with_clock(future, label: str):
+    """Wait for ``future`` under ``label``: on a terminal with the time so far, ticking
+    every second (the stability example compiles for about a minute: a line that does not
+    move looks like a hang); in a log, the label once."""
+    from tqdm import tqdm
+
+    if not sys.stderr.isatty():
+        print(f"{label} ...", file=sys.stderr, flush=True)
+        return future.result()
+    with tqdm(total=None, desc=label, bar_format="{desc}: {elapsed}", file=sys.stderr) as bar:
+        while True:
+            try:
+                return future.result(timeout=1.0)
+            except cf.TimeoutError:
+                bar.refresh()
 
 
 def _compute_local(sweep, todo, save, workers: int) -> None:

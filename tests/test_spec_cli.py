@@ -169,3 +169,38 @@ def test_crank_rocker_sweeps_its_own_link_ratios_through_the_cli(tmp_path):
     ds = xr.open_dataset(tmp_path / "general.nc")
     assert list(ds["lambda2"].values) == [2.5, 3.0] and "lambda2" not in ds.data_vars
     assert set(ds["lambda0"].values) == {2.0} and set(ds["lambda3"].values) == {1.5}
+
+
+def test_a_first_runs_compile_is_said_with_its_time_and_a_warm_start_says_nothing(
+        monkeypatch, capsys):
+    """A compile longer than runner.COMPILE_NOTICE_AFTER is announced, then how long it
+    took; a warm start (the cache loads at once) prints nothing; on a terminal the wait
+    shows the time so far, ticking every second (the stability example compiles for about
+    a minute)."""
+    import io
+    import re
+    import time
+
+    from sweep import engine, runner
+
+    monkeypatch.setattr(engine, "warm_up", lambda sweep: time.sleep(1.2))
+    runner.compile_first(None, announce=True)
+    err = capsys.readouterr().err
+    assert "compiling kernels (first run only" in err and re.search(r"compiled in \d+ s", err)
+    runner.compile_first(None, announce=False)
+    assert capsys.readouterr().err == ""
+    monkeypatch.setattr(engine, "warm_up", lambda sweep: None)
+    runner.compile_first(None, announce=True)
+    assert capsys.readouterr().err == ""
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    terminal = Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    monkeypatch.setattr(engine, "warm_up", lambda sweep: time.sleep(2.6))
+    runner.compile_first(None, announce=True)
+    shown = terminal.getvalue()
+    assert "compiling kernels (first run only" in shown and "00:01" in shown, shown
+    assert re.search(r"compiled in \d+ s", shown)
