@@ -95,7 +95,9 @@ def _wait_with_clock(future, label: str):
     if not sys.stderr.isatty():
         print(f"{label} ...", file=sys.stderr, flush=True)
         return future.result()
-    with tqdm(total=None, desc=label, bar_format="{desc}: {elapsed}", file=sys.stderr) as bar:
+    # the line's own size: a terminal that reports none (0 x 0) hid it
+    with tqdm(total=None, desc=label, bar_format="{desc}: {elapsed}", file=sys.stderr,
+              ncols=len(label) + 12, nrows=2) as bar:
         while True:
             try:
                 return future.result(timeout=1.0)

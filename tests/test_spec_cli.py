@@ -177,8 +177,10 @@ def test_a_first_runs_compile_is_said_with_its_time_and_a_warm_start_says_nothin
     took; a warm start (the cache loads at once) prints nothing; on a terminal the wait
     shows the time so far, ticking every second (the stability example compiles for about
     a minute)."""
-    import io
+    import os
+    import pty
     import re
+    import select
     import time
 
     from sweep import engine, runner
@@ -193,14 +195,19 @@ def test_a_first_runs_compile_is_said_with_its_time_and_a_warm_start_says_nothin
     runner.compile_first(None, announce=True)
     assert capsys.readouterr().err == ""
 
-    class Terminal(io.StringIO):
-        def isatty(self):
-            return True
-
-    terminal = Terminal()
+    # a pseudo-terminal as a new one is: it reports a size of 0 x 0 (tqdm then hid the
+    # line, taking it for a screen with no room)
+    main_fd, terminal_fd = pty.openpty()
+    terminal = os.fdopen(terminal_fd, "w")
     monkeypatch.setattr(sys, "stderr", terminal)
     monkeypatch.setattr(engine, "warm_up", lambda sweep: time.sleep(2.6))
     runner.compile_first(None, announce=True)
-    shown = terminal.getvalue()
+    terminal.flush()
+    shown = b""
+    while select.select([main_fd], [], [], 0.2)[0]:
+        shown += os.read(main_fd, 65536)
+    terminal.close()
+    os.close(main_fd)
+    shown = shown.decode()
     assert "compiling kernels (first run only" in shown and "00:01" in shown, shown
     assert re.search(r"compiled in \d+ s", shown)
