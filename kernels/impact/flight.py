@@ -36,7 +36,7 @@ from kernels.impact.events import make_bisection, make_locator
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW, Counters)
 from kernels.impact.runge_kutta import (accepted_step_size, ballistic_cap, initial_step,
-                                        make_stepper, next_step)
+                                        make_stepper, rejected_step_size)
 from kernels.impact.tuples import hermite, hermite_slope
 
 POLISH_ITERATIONS = 4
@@ -165,8 +165,8 @@ def make_flight(system):
             if not err <= 1.0:  # NaN too: a step into a blow-up is rejected, not taken
                 rejected += 1
                 after_reject = bool(True)
-                h = next_step(h, err, after_reject, err_prev)
-                if h < 1e-14 * max(1.0, abs(t)):
+                h, underflow = rejected_step_size(h, err, err_prev, t)
+                if underflow:
                     return Flight(FLIGHT_UNDERFLOW, -1, t, y, f, data, amplitude, peak,
                                   Counters(steps, rejected, events))
                 continue
@@ -261,8 +261,8 @@ def make_timed_flight(rhs, scales):
             steps += 1
             if not err <= 1.0:  # NaN too
                 after_reject = bool(True)
-                h = next_step(h, err, after_reject, err_prev)
-                if h < 1e-14 * max(1.0, abs(t)):
+                h, underflow = rejected_step_size(h, err, err_prev, t)
+                if underflow:
                     return False, y
                 continue
             finite = True

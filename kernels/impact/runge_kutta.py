@@ -88,6 +88,14 @@ def next_step(h, err, after_reject, err_prev):
 
 
 @njit(**INNER_OPTIONS)
+def rejected_step_size(h, err, err_prev, t):
+    """The step to retry after a rejection (the controller without growth), and whether it
+    fell below round-off of t: the flight cannot go on (a blow-up, a discontinuity)."""
+    h = next_step(h, err, bool(True), err_prev)
+    return h, h < 1e-14 * max(1.0, abs(t))
+
+
+@njit(**INNER_OPTIONS)
 def accepted_step_size(method, h, dt, err, after_reject, err_prev):
     """The next step after an accepted one: (h, err_prev) from the DOPRI5 controller, or dt
     for RK4 (a first step cut short by the ballistic-return cap is the only short one)."""
