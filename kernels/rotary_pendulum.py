@@ -361,8 +361,8 @@ def estimated_error(coarse, fine):
 
 def solve_auto(block, sub, tol, max_impacts, starts=1):
     """auto on a system without a closed form: DOPRI5 at AUTO_COARSE times the calibrated
-    rtol and AUTO_REFINE times finer, refined further where the estimate misses tol / 2. Counters
-    add up every solve."""
+    rtol and AUTO_REFINE times finer, refined further where the estimate exceeds
+    AUTO_ACCEPT tol. Counters add up every solve."""
     rtol = AUTO_COARSE * auto_rtol(tol)
     coarse = solve_system(block, sub, METHOD_DOPRI5, rtol, rtol * AUTO_ATOL_PER_RTOL, 0.0,
                           max_impacts, starts)

@@ -3,8 +3,9 @@
 Events are the zero crossings of functions g_e(t, y), each in its own direction (+1: g
 rising through 0, -1: falling), given as ``values(t, y, data)`` -> a tuple of g_e and
 ``rates(t, y, dy, data)`` -> a tuple of dg_e/dt. ``make_locator(values, rates, directions,
-step)`` returns ``locate(step, context) -> (event, s)``: the earliest crossing in (0, h] of a step,
-found on the step's cubic Hermite interpolant (event = -1: none):
+step)`` returns ``locate(step, context, start) -> (event, s, end)``: the earliest crossing in
+(0, h] of a step, found on the step's cubic Hermite interpolant (event = -1: none); start and
+end are the events' values and rates at the step's two ends:
 
 1. a chord bound skips a step whose g stays on one side: the cubic's distance from its chord
    is at most 4/27 h (|g'_0| + |g'_1|) (NaN rates: no bound, the step is sampled);
@@ -172,13 +173,15 @@ def make_locator(values, rates, directions, step):
         return -1.0
 
     @njit(**INNER_OPTIONS)
-    def locate(st, context):
-        """(event, s) of the earliest crossing in (0, h] of the step st = (t, h, y0, f0,
-        y1, f1), or (-1, -1.0); context = (system data, p, method, slack)."""
+    def locate(st, context, start):
+        """(event, s, end) of the earliest crossing in (0, h] of the step st = (t, h, y0,
+        f0, y1, f1), or (-1, -1.0, end); context = (system data, p, method, slack); start
+        and end = (values, rates) of the events at the step's two ends (the flight passes
+        a step's end on as the next step's start)."""
         t, h, y0, f0, y1, f1 = st
         system = context[0]
-        v0, v1 = values(t, y0, system), values(t + h, y1, system)
-        r0, r1 = rates(t, y0, f0, system), rates(t + h, y1, f1, system)
+        v0, r0 = start
+        v1, r1 = values(t + h, y1, system), rates(t + h, y1, f1, system)
         best_e, best_s = -1, -1.0
         for e in range(n_events):
             # the chord bound first, here: it settles almost every step without the call
@@ -190,6 +193,6 @@ def make_locator(values, rates, directions, step):
             s = first_crossing(e, (g0, g1), (r0[e], r1[e]), st, context)
             if s >= 0.0 and (best_e < 0 or s < best_s):
                 best_e, best_s = e, s
-        return best_e, best_s
+        return best_e, best_s, (v1, r1)
 
     return locate

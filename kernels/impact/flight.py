@@ -157,6 +157,9 @@ def make_flight(system):
         after_reject = bool(False)
         err_prev = 1.0
         crossings, memo = 0, (math.nan, math.nan)  # zero crossings of the angle, coast's memo
+        # the events' values and rates at the step's start: the last step's end, or anew
+        # where the flight moved otherwise (an event passed, a coast)
+        start = (values(t, y, data), rates(t, y, f, data))
         while steps + rejected < settings.max_steps:
             if t - t0 > settings.horizon:
                 return Flight(FLIGHT_HORIZON, -1, t, y, f, data, amplitude, peak,
@@ -171,7 +174,7 @@ def make_flight(system):
                                   Counters(steps, rejected, events))
                 continue
             steps += 1
-            e, s = locate((t, h, y, f, y1, f1), (data, p, method, slack))
+            e, s, end = locate((t, h, y, f, y1, f1), (data, p, method, slack), start)
             if e >= 0:
                 s, ys, fs = polish(e, (t, h, y, f), s, p, data, settings)
                 events += 1
@@ -197,6 +200,7 @@ def make_flight(system):
                 # passed (the striker goes by the tool): on from the event, state as it is
                 t, y, f, data = t + s, ys, fs, new_data
                 angle = angle_e
+                start = (values(t, y, data), rates(t, y, f, data))
                 continue
             angle1, rate1, accel1 = monitor(t + h, y1, f1)
             if not (math.isfinite(angle1) and math.isfinite(rate1)):  # RK4 has no error
@@ -217,6 +221,7 @@ def make_flight(system):
                     spacing = h / (PEAK_SAMPLES + 1)
                     best = (y, f, y1, f1, h, t, h - spacing, h + spacing)
                     best_value = abs(accel1)
+            skip = 0.0
             if (angle < 0.0) != (angle1 < 0.0):
                 crossings += 1
                 t_cross = t + h * angle / (angle - angle1)  # the chord's zero
@@ -224,6 +229,7 @@ def make_flight(system):
                                          t0 + settings.horizon - (t + h), memo)
                 t += skip
             t, y, f, angle = t + h, y1, f1, angle1
+            start = end if skip == 0.0 else (values(t, y, data), rates(t, y, f, data))
             h, err_prev = accepted_step_size(method, h, settings.dt, err, after_reject,
                                              err_prev)
             after_reject = bool(False)
