@@ -258,7 +258,7 @@ def refine(ds, var: str = "status", tol: float = 1e-8, target: Path | None = Non
            force: bool = False, progress: bool = False, history: str | None = None):
     """Refine every boundary of ``var`` in the atlas ``ds``; write the crossings to
     ``target`` (atomically) when given. Returns the crossings as an xarray Dataset."""
-    from sweep.runner import compile_first
+    from sweep.runner import compile_first, terminal_bar_size
 
     request = Request(ds, var, tol)
     if chunk is not None:
@@ -279,7 +279,7 @@ def refine(ds, var: str = "status", tol: float = 1e-8, target: Path | None = Non
 
     bar = tqdm(total=rounds + expected_rounds(edges, request.tol), initial=rounds,
                unit="round", delay=1.5, disable=not progress, file=sys.stderr,
-               desc="boundaries")
+               desc="boundaries", **terminal_bar_size())
     try:
         while rounds < MAX_ROUNDS:
             edges, count = bisect_round(request, edges, workers)

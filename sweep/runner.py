@@ -45,7 +45,7 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
     if todo and not sweep.run.scheduler:
         compile_first(sweep, announce=progress)
     bar = tqdm(total=plan.n_blocks, initial=len(store.done), unit="block", delay=1.5,
-               disable=not progress, file=sys.stderr, desc="sweep")
+               disable=not progress, file=sys.stderr, desc="sweep", **terminal_bar_size())
 
     def save(index, block):
         store.save(index, block)
@@ -61,6 +61,17 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
     write_atlas(store, plan, Path(path), history or history_line(), sweep.run.workers)
     store.discard()
     return {"blocks": plan.n_blocks, "reused": len(store.done)}
+
+
+def terminal_bar_size() -> dict:
+    """tqdm's line size on standard error: its terminal's own, or 80 x 24 where the terminal
+    reports none. A new pseudo-terminal reports 0 x 0, and tqdm then prints every line
+    empty (the sweep's block bar and the compile's clock alike)."""
+    try:
+        columns, rows = os.get_terminal_size(sys.stderr.fileno())
+    except (AttributeError, OSError, ValueError):  # not a terminal, or no file descriptor
+        return {}
+    return {} if columns and rows else {"ncols": 80, "nrows": 24}
 
 
 COMPILE_NOTICE_AFTER = 0.5  # s: a warm run takes less; numba's first compile far more
@@ -95,9 +106,8 @@ def _wait_with_clock(future, label: str):
     if not sys.stderr.isatty():
         print(f"{label} ...", file=sys.stderr, flush=True)
         return future.result()
-    # the line's own size: a terminal that reports none (0 x 0) hid it
     with tqdm(total=None, desc=label, bar_format="{desc}: {elapsed}", file=sys.stderr,
-              ncols=len(label) + 12, nrows=2) as bar:
+              **terminal_bar_size()) as bar:
         while True:
             try:
                 return future.result(timeout=1.0)

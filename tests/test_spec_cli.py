@@ -171,16 +171,58 @@ def test_crank_rocker_sweeps_its_own_link_ratios_through_the_cli(tmp_path):
     assert set(ds["lambda0"].values) == {2.0} and set(ds["lambda3"].values) == {1.5}
 
 
+def on_new_terminal(monkeypatch, run) -> str:
+    """What ``run()`` shows on standard error when that is a new pseudo-terminal: it
+    reports a size of 0 x 0, and tqdm then printed every line empty."""
+    import os
+    import pty
+    import select
+
+    main_fd, terminal_fd = pty.openpty()
+    terminal = os.fdopen(terminal_fd, "w")
+    monkeypatch.setattr(sys, "stderr", terminal)
+    run()
+    terminal.flush()
+    shown = b""
+    while select.select([main_fd], [], [], 0.2)[0]:
+        shown += os.read(main_fd, 65536)
+    monkeypatch.setattr(sys, "stderr", sys.__stderr__)
+    terminal.close()
+    os.close(main_fd)
+    return shown.decode()
+
+
+def test_the_sweeps_progress_bar_shows_on_a_new_terminal(monkeypatch, tmp_path):
+    """The block bar (shown after 1.5 s) on a 0 x 0 pseudo-terminal: it counts the blocks
+    (it printed empty lines before the bar took its size from terminal_bar_size)."""
+    import re
+    import time
+
+    from sweep import engine, runner, spec
+    from sweep.cli import _example_text
+
+    s = spec.parse(_example_text("crank_rocker"))
+    for axis in s.axes:
+        axis.values, axis.codes = axis.values[:4], axis.codes[:4]
+    run_block = engine.run_block
+
+    def slow_block(sweep, location):
+        time.sleep(0.3)
+        return run_block(sweep, location)
+
+    monkeypatch.setattr(engine, "run_block", slow_block)
+    shown = on_new_terminal(monkeypatch, lambda: runner.run_sweep(
+        s, tmp_path / "a.nc", chunk=4, workers=1, progress=True, history="bar test"))
+    assert "sweep:" in shown and re.search(r"(\d+)/\1 \[", shown), repr(shown)
+
+
 def test_a_first_runs_compile_is_said_with_its_time_and_a_warm_start_says_nothing(
         monkeypatch, capsys):
     """A compile longer than runner.COMPILE_NOTICE_AFTER is announced, then how long it
     took; a warm start (the cache loads at once) prints nothing; on a terminal the wait
     shows the time so far, ticking every second (the stability example compiles for about
     a minute)."""
-    import os
-    import pty
     import re
-    import select
     import time
 
     from sweep import engine, runner
@@ -195,19 +237,8 @@ def test_a_first_runs_compile_is_said_with_its_time_and_a_warm_start_says_nothin
     runner.compile_first(None, announce=True)
     assert capsys.readouterr().err == ""
 
-    # a pseudo-terminal as a new one is: it reports a size of 0 x 0 (tqdm then hid the
-    # line, taking it for a screen with no room)
-    main_fd, terminal_fd = pty.openpty()
-    terminal = os.fdopen(terminal_fd, "w")
-    monkeypatch.setattr(sys, "stderr", terminal)
+    # on a new terminal (0 x 0) the clock ticks
     monkeypatch.setattr(engine, "warm_up", lambda sweep: time.sleep(2.6))
-    runner.compile_first(None, announce=True)
-    terminal.flush()
-    shown = b""
-    while select.select([main_fd], [], [], 0.2)[0]:
-        shown += os.read(main_fd, 65536)
-    terminal.close()
-    os.close(main_fd)
-    shown = shown.decode()
+    shown = on_new_terminal(monkeypatch, lambda: runner.compile_first(None, announce=True))
     assert "compiling kernels (first run only" in shown and "00:01" in shown, shown
     assert re.search(r"compiled in \d+ s", shown)

@@ -30,7 +30,7 @@ from collections import namedtuple
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS
 from kernels.extrema import peak_search
 from kernels.impact.events import make_bisection, make_locator
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
@@ -139,6 +139,12 @@ def make_flight(system):
                 best, where = a, s
         return best, where - spacing, where + spacing
 
+    @njit(**INLINE_OPTIONS)
+    def events_at(t, y, f, data):
+        """The events' values and rates at a point of the flight: a step's start (the
+        locator returns them at the step's end, passed on as the next start)."""
+        return values(t, y, data), rates(t, y, f, data)
+
     @njit(**INNER_OPTIONS)
     def flight(t0, y0, p, data, settings, refine):
         method, rtol, atol = settings.method, settings.rtol, settings.atol
@@ -159,7 +165,7 @@ def make_flight(system):
         crossings, memo = 0, (math.nan, math.nan)  # zero crossings of the angle, coast's memo
         # the events' values and rates at the step's start: the last step's end, or anew
         # where the flight moved otherwise (an event passed, a coast)
-        start = (values(t, y, data), rates(t, y, f, data))
+        start = events_at(t, y, f, data)
         while steps + rejected < settings.max_steps:
             if t - t0 > settings.horizon:
                 return Flight(FLIGHT_HORIZON, -1, t, y, f, data, amplitude, peak,
@@ -200,7 +206,7 @@ def make_flight(system):
                 # passed (the striker goes by the tool): on from the event, state as it is
                 t, y, f, data = t + s, ys, fs, new_data
                 angle = angle_e
-                start = (values(t, y, data), rates(t, y, f, data))
+                start = events_at(t, y, f, data)
                 continue
             angle1, rate1, accel1 = monitor(t + h, y1, f1)
             if not (math.isfinite(angle1) and math.isfinite(rate1)):  # RK4 has no error
@@ -229,7 +235,7 @@ def make_flight(system):
                                          t0 + settings.horizon - (t + h), memo)
                 t += skip
             t, y, f, angle = t + h, y1, f1, angle1
-            start = end if skip == 0.0 else (values(t, y, data), rates(t, y, f, data))
+            start = end if skip == 0.0 else events_at(t, y, f, data)
             h, err_prev = accepted_step_size(method, h, settings.dt, err, after_reject,
                                              err_prev)
             after_reject = bool(False)
