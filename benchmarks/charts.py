@@ -17,6 +17,9 @@
    a step-end sign change against the kernels' detector (benchmarks/failure_maps.py).
 6. Failure map: escape misclassified near the separatrix by an integrator alone, over
    (rtol or step, distance to the separatrix).
+7. Work-precision of the rigid pendulum on the blade (200 random designs): its flights in
+   closed form over tol against DOPRI5 over rtol, in values and in regimes, against DOPRI5
+   at rtol 1e-13 (benchmarks/bench_exact_flights.py).
 """
 
 from __future__ import annotations
@@ -291,6 +294,38 @@ def separatrix_failure_map(path: Path):
     plt.close(fig)
 
 
+def blade_work_precision(path: Path):
+    from benchmarks.auto_cases import blade_points
+    from benchmarks.bench_exact_flights import closed_form, dopri5, measure, references
+
+    params, max_impacts = blade_points("rigid", 200, 7), 1000
+    reference = references(params, max_impacts)
+    series = {
+        "closed-form flights (tol = 1e-2 ... 1e-11)":
+            [measure(params, max_impacts, closed_form(t), reference)
+             for t in 10.0 ** -np.arange(2, 11.5)],
+        "DOPRI5 (rtol = 1e-6 ... 1e-12)":
+            [measure(params, max_impacts, dopri5(r), reference)
+             for r in 10.0 ** -np.arange(6, 12.5)]}
+    n = params.shape[1]
+    fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.6), constrained_layout=True)
+    for (name, rows), marker in zip(series.items(), ("o", "s")):
+        t = np.array([r["seconds"] for r in rows]) / n * 1e3
+        left.loglog(t, [r["largest value error"] for r in rows], marker + "-", label=name)
+        right.semilogx(t, [int(reference[1].sum()) - r["regime as reference (resolved)"]
+                           for r in rows], marker + "-", label=name)
+    left.set_xlabel("time per steady state [ms]")
+    left.set_ylabel("largest relative error of the cycle's values [-]")
+    left.set_title(f"values ({series[next(iter(series))][0]['values compared']} designs "
+                   "whose reference values are resolved)", fontsize=9)
+    left.grid(True, which="both", alpha=0.3)
+    left.legend(fontsize=8)
+    _finish(fig, right, path, "time per steady state [ms]",
+            f"designs in another regime (of {int(reference[1].sum())} resolved) [-]",
+            f"Rigid pendulum on the blade, {n} random designs: work-precision against "
+            "DOPRI5 at rtol 1e-13")
+
+
 def main():
     docs = ROOT / "docs"
     docs.mkdir(exist_ok=True)
@@ -300,10 +335,11 @@ def main():
     balancer_work_precision(docs / "work_precision_balancer.png")
     grazing_failure_map(docs / "failure_map_grazing.png")
     separatrix_failure_map(docs / "failure_map_separatrix.png")
+    blade_work_precision(docs / "work_precision_blade.png")
     print(f"wrote docs/: work_precision_pendulum.png (RK4 order {order:.2f}), "
           "loop_closure_near_node.png, failure_map_balancer_rk4.png, "
           "work_precision_balancer.png, failure_map_grazing.png, "
-          "failure_map_separatrix.png")
+          "failure_map_separatrix.png, work_precision_blade.png")
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ from kernels.impact.outcomes import (SEQUENCE_CYCLE, SEQUENCE_DEGENERATE, SEQUEN
                                      SEQUENCE_MAX_STEPS, SEQUENCE_NO_IMPACT,
                                      SEQUENCE_NONFINITE, SEQUENCE_NOT_PERIODIC,
                                      SEQUENCE_SEPARATRIX, SEQUENCE_UNDERFLOW)
-from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_RK4
+from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_EXACT, METHOD_RK4
 from kernels.pendulum.cases import CASE_COLUMNS, N_ROW, ROW, C
 from kernels.pendulum.models import (MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR, closed_flight,
                                      impacts_to_converge, paper_critical, rigid_critical,
@@ -39,13 +39,15 @@ _ROTOR = {"model": ("rotor",)}
 
 
 def _rules(given: dict) -> str | None:
-    """The closed form exists only for the constant-speed models on the rotor stop."""
+    """The closed form exists for the constant-speed models on the rotor stop and for the
+    rigid model's flights on the blade."""
     models = given.get("model", {"paper"})
     tools = given.get("tool", {"rotor_stop"})
     if "closed_form" in given.get("method.integrator", ()) and (
-            "rotor" in models or "lab_window" in tools):
+            "rotor" in models or "paper" in models and "lab_window" in tools):
         return ("method.integrator: \"closed_form\" exists only for the paper and rigid "
-                "models on the rotor stop; allowed here: \"auto\", \"rk4\", \"dopri5\"")
+                "models on the rotor stop and the rigid model on the blade; allowed here: "
+                "\"auto\", \"rk4\", \"dopri5\"")
     if max(given.get("method.starts", {1})) > 1 and not given.get("outputs", set()) & set(
             ATTRACTOR_OUTPUTS):
         return ("method.starts: more than one start is used only with the outputs "
@@ -73,7 +75,9 @@ DECLARATION = Mechanism(
             "steps; the lab "
             "blade by a gap function on the striker's polar angle, a slide after plastic or "
             "accumulated (Zeno) contact, and at constant rotor speed the whole free swings "
-            "that cannot meet the blade skipped in closed form; computed once per distinct "
+            "that cannot meet the blade skipped in closed form, and the rigid pendulum's "
+            "flights stepped exactly by Jacobi's elliptic functions (closed form, auto); "
+            "computed once per distinct "
             "case and rescaled by omega1 and l2",
     references="V. E. Erem'yants, N. N. Kynatbekova, Analysis of the kinematics of a "
                "rotary-pendulum impact mechanism (in Russian), Institute of Machine Science "
@@ -141,7 +145,9 @@ DECLARATION = Mechanism(
                "is known", "R_crit"),
         Output("rotor_speed_ratio", "1", "mean rotor speed over the steady cycle over "
                "omega1 (1 at constant rotor speed)"),
-        Output("n_steps", "1", "integration steps, accepted and rejected (0: closed form)",
+        Output("n_steps", "1", "integration steps, accepted and rejected (0: closed form on "
+               "the rotor stop; the rigid model's closed-form flights on the blade count "
+               "their exact steps)",
                diagnostic=True),
         Output("n_rejected", "1", "rejected integration steps among n_steps",
                diagnostic=True),
@@ -177,7 +183,8 @@ DECLARATION = Mechanism(
                "values (the largest over amplitude, frequency ratio, period, impact speed "
                "and interval, acceleration peak, rotor speed ratio, and the leading multiplier "
                "where asked for), from two DOPRI5 solves "
-               "8 times apart in rtol; 0 by the closed form; inf where the two solves reach "
+               "8 times apart in rtol; 0 by a closed form (on the blade: exact flights, the "
+               "cycle repeating to tol); inf where the two solves reach "
                "different regimes; NaN with a fixed integrator or without a cycle",
                diagnostic=True),
     ),
@@ -185,10 +192,11 @@ DECLARATION = Mechanism(
             "step_underflow", "degenerate", "nonfinite"),
     usable=("escape",),
     method=(
-        Quantity("integrator", "1", "auto (the closed form where the model has one, else "
-                 "DOPRI5 twice, 8 times apart in rtol, the finer solve reported with its "
-                 "error_estimate and refined where that exceeds tol/10), closed_form, rk4 "
-                 "or dopri5",
+        Quantity("integrator", "1", "auto (the closed form where the model has one: the "
+                 "paper and rigid models on the rotor stop, the rigid model's flights on the "
+                 "blade; else DOPRI5 twice, 8 times apart in rtol, the finer solve reported "
+                 "with its error_estimate and refined where that exceeds tol/10), "
+                 "closed_form (only where there is one), rk4 or dopri5",
                  default="auto",
                  choices={"auto": INTEGRATOR_AUTO, "closed_form": INTEGRATOR_CLOSED,
                           "rk4": INTEGRATOR_RK4, "dopri5": INTEGRATOR_DOPRI5}),
@@ -201,8 +209,9 @@ DECLARATION = Mechanism(
                  maximum=0.5, used_when={"integrator": ("rk4",)}),
         Quantity("max_impacts", "1", "impacts simulated at most", default=1000, minimum=1,
                  maximum=10**6, integer=True),
-        Quantity("tol", "1", "auto: relative accuracy requested of the outputs",
-                 default=1e-8, minimum=1e-11, maximum=1e-2, used_when={"integrator": ("auto",)}),
+        Quantity("tol", "1", "auto, and closed_form on the blade: relative accuracy "
+                 "requested of the outputs", default=1e-8, minimum=1e-11, maximum=1e-2,
+                 used_when={"integrator": ("auto", "closed_form")}),
         Quantity("starts", "1", "starting states per design for attractor_count and "
                  "basin_fraction (1: from rest only; each start costs a steady state)",
                  default=1, minimum=1, maximum=1000, integer=True),
@@ -384,6 +393,47 @@ def solve_auto(block, sub, tol, max_impacts, starts=1):
     return rows
 
 
+#: the systems whose free flight is known in closed form, stepped exactly (runge_kutta's
+#: METHOD_EXACT): the rigid model on the blade (models.rigid_exact)
+EXACT_FLIGHTS = ((MODEL_RIGID, TOOL_LAB_WINDOW),)
+
+
+#: the closed-form flight's longest step, in the pendulum's own time (at tol above 4e-6)
+EXACT_STEP_MAX = 0.2
+#: its section states repeat to 10 x this rtol (at most 1e-9), whatever tol: the flights are
+#: exact, so a tighter test costs a few sections (1-3 % of the steps), and a looser one
+#: takes a slowly drifting quasi-periodic sequence for a cycle (at rtol = tol/10 and tol
+#: 1e-6, 45 of the blade example's 306 designs, quasi-periodic at DOPRI5 rtol 1e-12,
+#: came out period_n)
+EXACT_SECTION_RTOL = 1e-10
+
+
+def exact_step_length(tol):
+    """The closed-form flight's step, in the pendulum's own time, for an accuracy tol: the
+    flow is exact, but the events are searched on a step's cubic Hermite interpolant
+    (kernels/impact/events.py), whose error is about L^4/384 of the motion's scale; L =
+    (384 tol)^(1/4) keeps it within tol, so that a contact is missed or invented only
+    within tol of grazing (docs/impact_core.md). At most EXACT_STEP_MAX: on 200 random
+    blade designs, steps of 0.5 (tol 1e-3) ended 6 more designs in another regime than
+    DOPRI5 at rtol 1e-13 than steps of 0.1-0.3 did."""
+    return min((384.0 * tol) ** 0.25, EXACT_STEP_MAX)
+
+
+def exact_settings(tol):
+    """(rtol, atol, step) of the closed-form flight for an accuracy tol: steps of
+    exact_step_length(tol), section states repeating to 10 x min(tol/10,
+    EXACT_SECTION_RTOL), and the tangent's and slides' flights, where integrated, by
+    DOPRI5 at that rtol."""
+    rtol = min(tol / 10.0, EXACT_SECTION_RTOL)
+    return rtol, rtol * AUTO_ATOL_PER_RTOL, exact_step_length(tol)
+
+
+def solve_exact(block, sub, tol, max_impacts, starts=1):
+    """A system with a closed-form flight, for an accuracy tol (exact_settings): the
+    flights exact to round-off, events polished to round-off."""
+    return solve_system(block, sub, METHOD_EXACT, *exact_settings(tol), max_impacts, starts)
+
+
 def driven_stop_margins(cases, rows, starts):
     """The margins of the constant-speed models on the rotor stop in closed form: one impact
     a cycle (speed ratio 1), the affine map's multiplier R (P-O6); from start j, arriving at
@@ -438,14 +488,25 @@ def solve_cases(cases, method, stability=False, starts=1):
             if stability:
                 block = TANGENT_SYSTEMS.get((m, t), block)
             sub = np.ascontiguousarray(cases[chosen])
-            if method.integrator == INTEGRATOR_AUTO:
+            # auto keeps two DOPRI5 solves where the multipliers are asked for: the tangent
+            # is integrated, and its error needs their estimate (an ill-conditioned blade
+            # multiplier moved 1.2e-4 between tangents at rtol 1e-9 and 1e-13)
+            exact = (m, t) in EXACT_FLIGHTS and (
+                method.integrator == INTEGRATOR_CLOSED
+                or method.integrator == INTEGRATOR_AUTO and not stability)
+            if exact:
+                out = solve_exact(block, sub, method.tol, method.max_impacts, starts)
+                out[:, ROW.error] = np.where(
+                    out[:, ROW.outcome] == SEQUENCE_CYCLE,
+                    0.0 if method.integrator == INTEGRATOR_AUTO else np.nan, np.nan)
+            elif method.integrator == INTEGRATOR_AUTO:
                 out = solve_auto(block, sub, method.tol, method.max_impacts, starts)
             else:
                 out = solve_system(block, sub, METHOD_RK4 if rk4 else METHOD_DOPRI5,
                                    method.rtol, method.atol, method.dt, method.max_impacts,
                                    starts)
                 out[:, ROW.error] = np.nan
-            out[:, ROW.method] = USED_RK4 if rk4 else USED_DOPRI5
+            out[:, ROW.method] = USED_CLOSED if exact else USED_RK4 if rk4 else USED_DOPRI5
             if t == TOOL_ROTOR_STOP and m != MODEL_ROTOR:
                 tol = 1e-9 if rk4 else max(10.0 * method.rtol, 1e-12)
                 for j in range(sub.shape[0]):

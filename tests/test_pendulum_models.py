@@ -6,11 +6,14 @@ import math
 
 import numpy as np
 import pytest
+from numba import njit
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from kernels import rotary_pendulum as kr
 from kernels.impact.impact_map import SPEED_EPS
+from kernels.impact.runge_kutta import METHOD_EXACT
+from kernels.pendulum.models import rigid_exact
 from kernels.pendulum.cases import CASE_COLUMNS, N_ROW
 from kernels.pendulum.systems import SYSTEMS
 from kernels.pendulum.tools import SECTION_MIN_FLIGHT
@@ -30,9 +33,10 @@ def steady(method=None, **design):
     return status, out
 
 
-def section_log(sections, rtol=1e-11, atol=None, **design):
+def section_log(sections, rtol=1e-11, atol=None, exact_tol=None, **design):
     """The section impacts (rotor angle mod 2 pi, psi) of a design's impact sequence, from
-    the block of its model and tool: one row per section, NaN beyond the last."""
+    the block of its model and tool: one row per section, NaN beyond the last. With
+    exact_tol, by the closed-form flight (the rigid model on the blade) for that tol."""
     given = dict(model="paper", k=2.5, xi=XI, kappa=None, R=0.0, tool="rotor_stop",
                  tool_window=0.2, rotor_inertia_ratio=100.0, motor_slope=100.0,
                  idle_speed=1.0)
@@ -42,8 +46,11 @@ def section_log(sections, rtol=1e-11, atol=None, **design):
     case = np.array([[CODES[c].encode(given[c]) for c in CASE_COLUMNS]])
     rows, log = np.empty((1, N_ROW)), np.full((sections, 2), np.nan)
     block = SYSTEMS[(int(case[0, 0]), int(case[0, 5]))]
-    block(case, 1, rtol, rtol * 1e-2 if atol is None else atol, 0.002, sections - 1, 1,
-          rows, log)
+    if exact_tol is not None:
+        block(case, METHOD_EXACT, *kr.exact_settings(exact_tol), sections - 1, 1, rows, log)
+    else:
+        block(case, 1, rtol, rtol * 1e-2 if atol is None else atol, 0.002, sections - 1, 1,
+              rows, log)
     return log
 
 
@@ -365,19 +372,27 @@ class LabReference:
         return phases, speeds, "running"
 
 
-@pytest.mark.parametrize("model, k, kappa, window", [
-    ("paper", 2.5, 0.8, 0.2),   # slides off the blade edge: once per turn
-    ("rigid", 1.0, 1.2, 0.2),   # 30 and 13 passes inside the blade between impacts
-    ("rigid", 1.0, 1.2, 0.45),
+#: the rigid model's flights on the blade by DOPRI5 (rtol 1e-11) and in closed form (tol 1e-10)
+FLIGHTS = {"dopri5": (None, None), "closed_form": (1e-10, dict(integrator="closed_form",
+                                                               tol=1e-10))}
+
+
+@pytest.mark.parametrize("model, k, kappa, window, flight", [
+    ("paper", 2.5, 0.8, 0.2, "dopri5"),   # slides off the blade edge: once per turn
+    ("rigid", 1.0, 1.2, 0.2, "dopri5"),   # 30 and 13 passes inside the blade between impacts
+    ("rigid", 1.0, 1.2, 0.45, "dopri5"),
+    ("rigid", 1.0, 1.2, 0.2, "closed_form"),
+    ("rigid", 1.0, 1.2, 0.45, "closed_form"),
 ])
-def test_lab_blade_impact_sequence_matches_scipy(model, k, kappa, window):
+def test_lab_blade_impact_sequence_matches_scipy(model, k, kappa, window, flight):
     design = dict(model=model, k=k, kappa=kappa, tool="lab_window", tool_window=window)
+    exact_tol, method = FLIGHTS[flight]
     ref_phases, ref_speeds, state = LabReference(model, k, kappa, 0.0, window).run(6)
-    phases = section_log(6, **design)[:, 0]
+    phases = section_log(6, exact_tol=exact_tol, **design)[:, 0]
     n = min(len(ref_phases), int(np.sum(np.isfinite(phases))))
     assert n >= 3
     np.testing.assert_allclose(phases[:n], ref_phases[:n], atol=1e-7)
-    status, out = steady(**design)
+    status, out = steady(method, **design)
     assert status == "ok" and out["regime"] in (REG["period_1"], REG["period_n"])
     assert (out["impact_speed"] == pytest.approx(ref_speeds[-1], rel=1e-7)
             or out["regime"] == REG["period_n"])
@@ -436,11 +451,13 @@ def test_H11_border_collision_regime_changes_where_the_impact_meets_the_blade_ed
             np.testing.assert_allclose(log[:n, 0], ref_phases[:n], atol=1e-6)
 
 
+@pytest.mark.parametrize("flight", FLIGHTS)
 @pytest.mark.parametrize("model, k, kappa, r, window", [
     ("rigid", 1.443, 24.92, 0.38, 0.847),
     ("rigid", 1.008, 22.64, 0.267, 0.754),
 ])
-def test_lab_blade_chatter_accumulates_and_ends_as_scipy_does(model, k, kappa, r, window):
+def test_lab_blade_chatter_accumulates_and_ends_as_scipy_does(model, k, kappa, r, window,
+                                                             flight):
     """R > 0 on a stiff pendulum (large kappa): after an impact the striker bounces, the
     rotor carries it back into the blade and it chatters; the Zeno guard ends the sequence
     at its accumulation point (H6) and the striker slides. SciPy with an event at every
@@ -450,35 +467,148 @@ def test_lab_blade_chatter_accumulates_and_ends_as_scipy_does(model, k, kappa, r
     ref = LabReference(model, k, kappa, r, window)
     ref_phases, _, state = ref.run(6)
     assert ref.accumulations >= 1 and ref.contacts >= 10  # it did chatter
-    log = section_log(6, **design)
+    exact_tol, method = FLIGHTS[flight]
+    log = section_log(6, exact_tol=exact_tol, **design)
     np.testing.assert_allclose(log[:, 0], ref_phases, atol=1e-6)
-    status, out = steady(**design)  # and the whole run ends, with a regime
+    status, out = steady(method, **design)  # and the whole run ends, with a regime
     assert status == "ok" and np.isfinite(out["regime"])
     assert out["n_events"] > ref.contacts  # chatter counted
 
 
+@pytest.mark.parametrize("flight", FLIGHTS)
 @pytest.mark.parametrize("k, kappa, r, window, period", [
     (0.926, 25.32, 0.363, 1.463, 3),
     (1.767, 13.12, 0.128, 1.45, 2),
 ])
-def test_lab_blade_steady_chatter_regime_matches_scipy(k, kappa, r, window, period):
+def test_lab_blade_steady_chatter_regime_matches_scipy(k, kappa, r, window, period, flight):
     """Steady states whose every cycle contains a chatter sequence ending at its
     accumulation point (found by a random scan: 17 of 400 blade cases). The kernel says
     `chatter` with the cycle's impact interval; SciPy repeats the same section impacts."""
     design = dict(model="rigid", k=k, kappa=kappa, R=r, tool="lab_window", tool_window=window)
-    status, out = steady(**design)
+    exact_tol, method = FLIGHTS[flight]
+    status, out = steady(method, **design)
     assert status == "ok" and out["regime"] == REG["chatter"]
     ref = LabReference("rigid", k, kappa, r, window)
     ref_phases, _, _ = ref.run(2 + 3 * period)
     assert ref.accumulations >= 2
     tail = np.array(ref_phases[-period:]), np.array(ref_phases[-2 * period:-period])
     np.testing.assert_allclose(*tail, atol=1e-7)  # SciPy's sections repeat with the period
-    log = section_log(2 + 3 * period, **design)
+    log = section_log(2 + 3 * period, exact_tol=exact_tol, **design)
     n = int(np.sum(np.isfinite(log[:, 0])))
     np.testing.assert_allclose(log[:n, 0], ref_phases[:n], atol=1e-6)
     interval = out["impact_interval"]
     turns = round(interval * period / (2 * math.pi))
     assert interval == pytest.approx(2 * math.pi * turns / period, rel=1e-9)  # phase-locked
+
+
+@njit
+def _exact_walk(psi, dpsi, k, kappa, h, n):
+    y = (psi, dpsi)
+    for _ in range(n):
+        y = rigid_exact(y, h, (k, kappa))
+    return y
+
+
+def test_the_rigid_pendulums_exact_step_against_scipy_and_mpmath():
+    """The closed-form flight's step (Jacobi's addition theorem, models.rigid_exact),
+    walked over random spans at random designs and energies: libration, rotation over the
+    top and near the separatrix. Against DOP853 at 1e-13 within 1e-10 where the energy is
+    1e-3 or more from the separatrix; near it (m within 1e-8..1e-12 of 1), where DOP853
+    itself is off by up to 1e-7, against mpmath's Taylor solver at 30 digits, within 1e-8
+    (the error there is round-off amplified by the flight's own sensitivity, the period
+    growing like log(1/(1 - m)))."""
+    import mpmath
+
+    rng = np.random.default_rng(31)
+    for i in range(60):
+        k, kappa = rng.uniform(0.5, 4.0), rng.uniform(0.2, 1.5)
+        omega = math.sqrt(k * kappa)
+        psi = rng.uniform(-math.pi, math.pi)
+        m = [rng.uniform(0.0, 0.999), rng.uniform(1.001, 8.0)][i % 2]
+        x = math.sin(psi / 2)
+        psi = 2 * math.asin(min(abs(x), math.sqrt(m) * 0.999)) * math.copysign(1, x)
+        dpsi = 2 * omega * math.sqrt(m - math.sin(psi / 2) ** 2) * rng.choice([-1, 1])
+        span = rng.uniform(1.0, 20.0)
+        n = int(span / 0.05) + 1
+        got = _exact_walk(psi, dpsi, k, kappa, span / n, n)
+        want = solve_ivp(lambda t, y: [y[1], -k * kappa * math.sin(y[0])], (0, span),
+                         [psi, dpsi], method="DOP853", rtol=1e-13, atol=1e-13).y[:, -1]
+        np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-10)
+    mpmath.mp.dps = 30
+    for i in range(3):
+        k, kappa = rng.uniform(0.5, 4.0), rng.uniform(0.2, 1.5)
+        omega = math.sqrt(k * kappa)
+        psi, m = rng.uniform(-2.0, 2.0), 1 - 10 ** rng.uniform(-12, -8)
+        dpsi = 2 * omega * math.sqrt(m - math.sin(psi / 2) ** 2)
+        span = rng.uniform(6.0, 10.0)
+        got = _exact_walk(psi, dpsi, k, kappa, span / 200, 200)
+        kk = mpmath.mpf(k) * mpmath.mpf(kappa)
+        flow = mpmath.odefun(lambda t, y: [y[1], -kk * mpmath.sin(y[0])], 0,
+                             [mpmath.mpf(psi), mpmath.mpf(dpsi)])
+        np.testing.assert_allclose(got, [float(v) for v in flow(mpmath.mpf(span))],
+                                   rtol=0, atol=1e-8)
+    assert _exact_walk(0.0, 0.0, 1.0, 1.0, 0.3, 10) == (0.0, 0.0)  # rest stays at rest
+
+
+def test_closed_form_flights_on_the_blade_match_dopri5_at_random_designs():
+    """The rigid model on the blade with its flights in closed form (tol 1e-9) against
+    DOPRI5 at rtol 1e-12, at 60 random designs (benchmarks/auto_cases.blade_points: every
+    regime, chatter and slides included). Where DOPRI5 at 1e-10, 1e-11 and 1e-12 agree on
+    the regime, the period and the impacts to converge, and to 1e-8 on the cycle (the
+    designs the reference resolves), the closed form reaches the same regime, period and
+    impacts and the same values within 1e-7 (a sequence that flies the whole budget, the
+    budget's verdict). The designs DOPRI5 does not resolve are
+    sensitive blade patterns: a regime that flips with rtol between chatter and period 1, a
+    chaotic transient that lasts 14 to 408 impacts, and on one the closed form at tol 1e-8
+    agrees with itself at 1e-12 within 1e-8 where DOPRI5 at 1e-12 was 4.7e-7 off. A flight
+    stepped past a contact, or a wrong addition theorem, fails it."""
+    from benchmarks.auto_cases import OUT, blade_points, run
+
+    params = blade_points("rigid", 60, 20261125)
+    exact, _ = run(params, "closed_form", tol=1e-9)
+    assert np.all(exact[OUT["method_used"]] == kr.USED_CLOSED)
+    refs = [run(params, "dopri5", rtol=r, atol_per_rtol=1e-2)[0]
+            for r in (1e-10, 1e-11, 1e-12)]
+    values = ["impact_speed", "impact_interval", "amplitude", "acceleration_peak"]
+
+    def agree(a, b, rel):
+        same = np.ones(a.shape[1], bool)
+        for name in ("regime", "impacts_to_converge"):
+            same &= np.nan_to_num(a[OUT[name]], nan=-1) == np.nan_to_num(b[OUT[name]], nan=-1)
+        for name in values:
+            same &= np.nan_to_num(np.abs(a[OUT[name]] / b[OUT[name]] - 1.0)) <= rel
+        return same
+
+    resolved = agree(refs[0], refs[2], 1e-8) & agree(refs[1], refs[2], 1e-8)
+    assert resolved.sum() >= 30, resolved.sum()
+    assert len(np.unique(refs[2][OUT["regime"]][resolved])) >= 3  # regimes of every kind
+    # a sequence that flies the whole budget (1000 impacts) has the budget's verdict, read
+    # from its last sections: quasi-periodic, or max_steps where they still seem to contract
+    budget = refs[2][OUT["impacts_to_converge"]] == 1000
+    assert np.all(exact[OUT["impacts_to_converge"]][resolved & budget] == 1000)
+    bad = resolved & ~budget & ~agree(exact, refs[2], 1e-7)
+    assert not bad.any(), np.flatnonzero(bad)
+
+
+def test_closed_form_flights_find_a_contact_within_1e_4_of_grazing():
+    """H3 on the exact flights: a random blade design (found by benchmarks/
+    bench_exact_flights.py) whose steady cycle holds, beside its impact, a contact at
+    1.3e-4 of the impact speed. Flights stepped past it land on another cycle of the same
+    regime (an impact 8.01 turns apart instead of 6: at tol 1e-3, steps of 0.2, whose
+    cubic is 4e-6 off, do). The closed form at tol 1e-6 and 1e-8 finds it and the cycle of
+    DOPRI5 at rtol 1e-12, within 1e-8."""
+    design = dict(model="rigid", k=1.4636868429875705, kappa=1.2724858801487058, R=0.0,
+                  tool="lab_window", tool_window=0.22670357190003398)
+    status, ref = steady(dict(rtol=1e-12, atol=1e-14), **design)
+    assert status == "ok" and ref["regime"] == REG["period_1"]
+    assert ref["impact_speed_min_ratio"] == pytest.approx(1.33e-4, rel=0.01)
+    assert ref["impact_interval"] == pytest.approx(12 * math.pi, rel=1e-12)
+    for tol in (1e-6, 1e-8):
+        status, out = steady(dict(integrator="closed_form", tol=tol), **design)
+        assert status == "ok" and out["regime"] == REG["period_1"]
+        for name in ("impact_speed", "impact_interval", "impact_speed_min_ratio",
+                     "edge_margin", "amplitude"):
+            assert out[name] == pytest.approx(ref[name], rel=1e-8), (tol, name)
 
 
 def test_lab_window_through_the_atlas(tmp_path):
@@ -493,8 +623,31 @@ def test_lab_window_through_the_atlas(tmp_path):
     assert ds["impact_interval"].attrs["units"] == "rad"
     speed = ds["impact_speed"].values
     np.testing.assert_allclose(speed[:, 1], 2.0 * speed[:, 0], rtol=1e-12)  # omega1 scale
+    # auto flies the rigid model on the blade in closed form (kr.EXACT_FLIGHTS)
     assert ds["method_used"].attrs["flag_meanings"].split()[int(ds["method_used"][0, 0])] \
-        == "dopri5"
+        == "closed_form"
+
+
+@pytest.mark.parametrize("fixed, allowed", [
+    ('model = "rigid"\ntool = "lab_window"\nkappa = 1.2', True),   # exact flights
+    ('model = "rigid"\ntool = "rotor_stop"', True),                 # the closed form
+    ('model = "paper"\ntool = "lab_window"', False),
+    ('model = "rotor"\ntool = "rotor_stop"', False),
+])
+def test_closed_form_is_refused_in_one_line_where_a_model_has_none(fixed, allowed):
+    from sweep import spec
+    from sweep.errors import UserError
+
+    text = ('mechanism = "rotary_pendulum"\n[fixed]\n' + fixed + '\n[grid]\n'
+            'k = [1.0, 2.0]\n[method]\nintegrator = "closed_form"\n')
+    if allowed:
+        spec.parse(text)
+        return
+    with pytest.raises(UserError) as err:
+        spec.parse(text)
+    message = str(err.value)
+    assert message.startswith("method.integrator") and "\n" not in message
+    assert '"dopri5"' in message
 
 
 def test_distinct_rows_equals_the_exact_sort_and_survives_a_hash_collision(monkeypatch):

@@ -59,8 +59,9 @@ def no_coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo):
 #: added to t, a whole number of periods, after which y and f are the same; memo: two
 #: floats the coast keeps between calls of one flight, NaN at its start)
 System = namedtuple("System", ["rhs", "scales", "event_values", "event_rates", "directions",
-                               "on_event", "start_gap", "monitor", "coast"],
-                    defaults=(no_coast,))
+                               "on_event", "start_gap", "monitor", "coast", "exact",
+                               "exact_length"],
+                    defaults=(no_coast, None, None))
 
 #: what happens at a contact, for the impact map (impact_map.py). ``model``: the flying
 #: body's functions the map needs (namedtuple fields response(y, J_phi, J_psi, p) = M^-1 J^T

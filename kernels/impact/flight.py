@@ -35,8 +35,9 @@ from kernels.extrema import peak_search
 from kernels.impact.events import make_bisection, make_locator
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW, Counters)
-from kernels.impact.runge_kutta import (accepted_step_size, ballistic_cap, initial_step,
-                                        make_stepper, rejected_step_size)
+from kernels.impact.runge_kutta import (METHOD_EXACT, accepted_step_size, ballistic_cap,
+                                        initial_step, integrated, make_stepper,
+                                        rejected_step_size)
 from kernels.impact.tuples import hermite, hermite_slope
 
 POLISH_ITERATIONS = 4
@@ -50,13 +51,20 @@ Flight = namedtuple("Flight", ["outcome", "event", "t", "y", "f", "data", "ampli
                                "peak", "cost"])
 
 
+@njit(**INLINE_OPTIONS)
+def _no_length(y, p, length):
+    return length
+
+
 def make_flight(system):
     """The flight loop of a system (see the module docstring)."""
     rhs, monitor = system.rhs, system.monitor
     values, rates, on_event, start_gap = (system.event_values, system.event_rates,
                                           system.on_event, system.start_gap)
     coast = system.coast
-    step = make_stepper(rhs, system.scales)
+    step = make_stepper(rhs, system.scales, system.exact)
+    has_exact = system.exact is not None
+    exact_length = system.exact_length if has_exact else _no_length
     locate = make_locator(values, rates, system.directions, step)
 
     @njit(**INNER_OPTIONS)
@@ -147,12 +155,16 @@ def make_flight(system):
 
     @njit(**INNER_OPTIONS)
     def flight(t0, y0, p, data, settings, refine):
-        method, rtol, atol = settings.method, settings.rtol, settings.atol
+        method = integrated(settings.method, bool(has_exact))
+        rtol, atol = settings.rtol, settings.atol
         slack = max(100.0 * atol, 1e-10)  # how far beyond a level a step may start (events.py)
         t, y = t0, y0
         f = rhs(y, p)
         angle, rate, accel = monitor(t, y, f)
-        h = initial_step(method, settings.dt, rate, rtol)
+        if method == METHOD_EXACT:
+            h = exact_length(y, p, settings.dt)
+        else:
+            h = initial_step(method, settings.dt, rate, rtol)
         gap_rate, gap_acceleration = start_gap(t, y, f, data, p)
         h = ballistic_cap(h, gap_rate, gap_acceleration)
         steps = rejected = events = 0
@@ -236,8 +248,11 @@ def make_flight(system):
                 t += skip
             t, y, f, angle = t + h, y1, f1, angle1
             start = end if skip == 0.0 else events_at(t, y, f, data)
-            h, err_prev = accepted_step_size(method, h, settings.dt, err, after_reject,
-                                             err_prev)
+            if method == METHOD_EXACT:
+                h = exact_length(y, p, settings.dt)
+            else:
+                h, err_prev = accepted_step_size(method, h, settings.dt, err, after_reject,
+                                                 err_prev)
             after_reject = bool(False)
         return Flight(FLIGHT_MAX_STEPS, -1, t, y, f, data, amplitude, peak,
                       Counters(steps, rejected, events))
@@ -256,7 +271,8 @@ def make_timed_flight(rhs, scales):
 
     @njit(**INNER_OPTIONS)
     def timed_flight(t0, y0, t1, p, settings):
-        method, rtol, atol = settings.method, settings.rtol, settings.atol
+        method = integrated(settings.method, bool(False))
+        rtol, atol = settings.rtol, settings.atol
         t, y = t0, y0
         if not t1 > t0:
             return t1 == t0, y0

@@ -16,7 +16,8 @@ from numba import njit
 from kernels import INNER_OPTIONS
 from kernels.impact.tuples import error_norm, lincomb, weighted
 
-METHOD_RK4, METHOD_DOPRI5 = 0, 1
+#: METHOD_EXACT: the system's closed-form flow (``exact``), where it has one; DOPRI5 where not
+METHOD_RK4, METHOD_DOPRI5, METHOD_EXACT = 0, 1, 2
 
 # Dormand-Prince 5(4): nodes are implicit in the stages; weights b (5th order), and the
 # error weights e = b5 - b4
@@ -30,8 +31,17 @@ E1, E3, E4, E5, E6, E7 = (71 / 57600, -71 / 16695, 71 / 1920, -17253 / 339200, 2
                           -1 / 40)
 
 
-def make_stepper(rhs, scales):
-    """The step of the two methods, specialised to rhs and the error scales."""
+@njit(**INNER_OPTIONS)
+def _no_exact(y, h, p):
+    return y
+
+
+def make_stepper(rhs, scales, exact=None):
+    """The step of the methods, specialised to rhs, the error scales and, where the system
+    has one, its exact flow ``exact(y, h, p)`` (its error estimate is 0); a system without
+    one takes DOPRI5's step for METHOD_EXACT (the tangent's and the slide's flights)."""
+    has_exact = exact is not None
+    exact = exact if has_exact else _no_exact
 
     @njit(**INNER_OPTIONS)
     def dopri5(y, f0, h, p):
@@ -56,13 +66,23 @@ def make_stepper(rhs, scales):
 
     @njit(**INNER_OPTIONS)
     def step(method, y, f0, h, p, rtol, atol):
-        if method == METHOD_DOPRI5:
+        if has_exact and method == METHOD_EXACT:
+            y1 = exact(y, h, p)
+            return y1, rhs(y1, p), 0.0
+        if method != METHOD_RK4:
             y1, f1, err = dopri5(y, f0, h, p)
             return y1, f1, error_norm(err, scales(y, y1, rtol, atol))
         y1, f1 = rk4(y, f0, h, p)
         return y1, f1, 0.0
 
     return step
+
+
+@njit(**INNER_OPTIONS)
+def integrated(method, has_exact):
+    """The method a flight steps with: METHOD_EXACT only where the system has an exact
+    flow, DOPRI5 for it elsewhere."""
+    return METHOD_DOPRI5 if method == METHOD_EXACT and not has_exact else method
 
 
 @njit(**INNER_OPTIONS)

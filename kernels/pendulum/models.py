@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
-from kernels.elementary import sincos_quadrant
+from kernels.elementary import jacobi_small, sincos_quadrant
 from kernels.impact.events import make_illinois
 from kernels.impact.tuples import relative_scales
 
@@ -34,7 +34,8 @@ MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR = 0, 1, 2
 Model = namedtuple("Model", [
     "rhs", "scales", "monitor", "accelerations", "response", "rotor_angle", "rotor_speed",
     "psi", "dpsi", "compose", "critical_speed", "shift", "driven", "jacobian",
-    "response_slope", "tangent_state", "tangent_coordinates", "swing"])
+    "response_slope", "tangent_state", "tangent_coordinates", "swing", "exact",
+    "exact_length"], defaults=(None, None))
 
 #: the half period's Gauss-Legendre panels: 20 nodes each, halving towards the turning point
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
@@ -140,7 +141,7 @@ def driven_response(y, j_phi, j_psi, p):
     return 0.0, 1.0
 
 
-def driven_model(rhs, critical_speed, jacobian, swing):
+def driven_model(rhs, critical_speed, jacobian, swing, exact=None, exact_length=None):
     @njit(**INLINE_OPTIONS)
     def accelerations(t, y, p):
         return 0.0, rhs(y, p)[1]
@@ -149,7 +150,7 @@ def driven_model(rhs, critical_speed, jacobian, swing):
                  driven_rotor_angle, driven_rotor_speed, driven_psi, driven_dpsi,
                  driven_compose, critical_speed, driven_shift, True, jacobian,
                  driven_response_slope, driven_tangent_state, driven_tangent_coordinates,
-                 swing)
+                 swing, exact, exact_length)
 
 
 # ---------------------------------------------------------------- rotor of finite inertia
@@ -678,8 +679,40 @@ def rigid_swing(y, p, window):
     return tau1, window / math.sqrt(u) if u > 0.0 else math.inf
 
 
+@njit(**INLINE_OPTIONS)
+def rigid_exact(y, h, p):
+    """The rigid pendulum's state a time h on, exact to round-off (the closed-form flight's
+    step): with X = sin(psi/2), Y = psi'/(2 Omega), Z = cos(psi/2) and m = X^2 + Y^2 (the
+    energy), the free motion is X = sqrt(m) sn(Omega tau | m), Y = sqrt(m) cn, Z = dn
+    (m > 1: over the top), and Jacobi's addition theorem moves the three on by Omega h
+    without dividing by sqrt(m) (rest, m = 0, included); psi moves by twice the angle
+    from (Z, X) to (Z1, X1), which a step keeps below pi/2."""
+    omega = math.sqrt(p[0] * p[1])
+    half = 0.5 * y[0]
+    x, z = math.sin(half), math.cos(half)
+    v = 0.5 * y[1] / omega
+    sn, cn, dn = jacobi_small(omega * h, x * x + v * v)
+    inverse = 1.0 / (1.0 - x * x * sn * sn)
+    x1 = (x * cn * dn + v * z * sn) * inverse
+    v1 = (v * cn - x * z * sn * dn) * inverse
+    z1 = (z * dn - x * v * sn * cn) * inverse
+    return y[0] + 2.0 * math.atan2(x1 * z - z1 * x, z1 * z + x1 * x), 2.0 * omega * v1
+
+
+@njit(**INLINE_OPTIONS)
+def rigid_exact_length(y, p, length):
+    """The closed-form flight's step from y: ``length`` in the pendulum's own time, 1/Omega
+    at rest and 1/sqrt(Omega^2 sin^2(psi/2) + psi'^2/4) in a fast swing, and at most
+    ``length`` rotor radians (the blade's faces move with the rotor)."""
+    omega2 = p[0] * p[1]
+    x = math.sin(0.5 * y[0])
+    rate = math.sqrt(max(omega2, omega2 * x * x + 0.25 * y[1] * y[1]))
+    return length / max(1.0, rate)
+
+
 PAPER = driven_model(paper_rhs, paper_critical, paper_jacobian, paper_swing)
-RIGID = driven_model(rigid_rhs, rigid_critical, rigid_jacobian, rigid_swing)
+RIGID = driven_model(rigid_rhs, rigid_critical, rigid_jacobian, rigid_swing, rigid_exact,
+                     rigid_exact_length)
 
 
 @njit(**KERNEL_OPTIONS)

@@ -14,7 +14,7 @@ from numba import njit
 from kernels import KERNEL_OPTIONS, INNER_OPTIONS
 from kernels.impact.impact_map import make_impact_map
 from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings, add
-from kernels.impact.runge_kutta import METHOD_DOPRI5
+from kernels.impact.runge_kutta import METHOD_RK4
 from kernels.pendulum import models, tools
 from kernels.pendulum.cases import C, ROW
 
@@ -68,8 +68,9 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     @njit(**INNER_OPTIONS)
     def block(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
         settings = Settings(method, rtol, atol, dt, 10 ** 6, horizon)
-        # section states repeat to 10 rtol (DOPRI5), or to 1e-9 at RK4's fixed step
-        tol = max(10.0 * rtol, 1e-12) if method == METHOD_DOPRI5 else 1e-9
+        # section states repeat to 10 rtol (DOPRI5, the closed-form flight), or to 1e-9 at
+        # RK4's fixed step
+        tol = max(10.0 * rtol, 1e-12) if method != METHOD_RK4 else 1e-9
         for c in range(cases.shape[0]):
             case = cases[c]
             row = rows[c]

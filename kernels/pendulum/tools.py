@@ -546,7 +546,8 @@ def lab_window(model):
 
     free_flight, _ = make_flight(System(model.rhs, model.scales, values, rates, (1, -1, 1),
                                         on_event, start_gap, monitor,
-                                        _swing_coast(model) if model.driven else no_coast))
+                                        _swing_coast(model) if model.driven else no_coast,
+                                        model.exact, model.exact_length))
     shift = model.shift
 
     @njit(**INNER_OPTIONS)
