@@ -184,7 +184,7 @@ DECLARATION = Mechanism(
                "and interval, acceleration peak, rotor speed ratio, and the leading multiplier "
                "where asked for), from two DOPRI5 solves "
                "8 times apart in rtol; 0 by a closed form (on the blade: exact flights, the "
-               "cycle repeating to tol); inf where the two solves reach "
+               "cycle repeating to 1e-9); inf where the two solves reach "
                "different regimes; NaN with a fixed integrator or without a cycle",
                diagnostic=True),
     ),
@@ -434,6 +434,13 @@ def solve_exact(block, sub, tol, max_impacts, starts=1):
     return solve_system(block, sub, METHOD_EXACT, *exact_settings(tol), max_impacts, starts)
 
 
+def closed_form_estimate(rows, integrator):
+    """The error_estimate of rows solved in closed form: 0 where there is a cycle with
+    auto (no integration error to estimate), NaN elsewhere and with a fixed integrator."""
+    cycle = rows[:, ROW.outcome] == SEQUENCE_CYCLE
+    return np.where(cycle, 0.0 if integrator == INTEGRATOR_AUTO else np.nan, np.nan)
+
+
 def driven_stop_margins(cases, rows, starts):
     """The margins of the constant-speed models on the rotor stop in closed form: one impact
     a cycle (speed ratio 1), the affine map's multiplier R (P-O6); from start j, arriving at
@@ -470,10 +477,7 @@ def solve_cases(cases, method, stability=False, starts=1):
         sub = np.ascontiguousarray(cases[closed])
         closed_form_block(sub, rows_closed)
         rows_closed[:, ROW.method] = USED_CLOSED
-        # exact to round-off: the estimate auto reports is 0 where there is a cycle
-        rows_closed[:, ROW.error] = np.where(
-            rows_closed[:, ROW.outcome] == SEQUENCE_CYCLE,
-            0.0 if method.integrator == INTEGRATOR_AUTO else np.nan, np.nan)
+        rows_closed[:, ROW.error] = closed_form_estimate(rows_closed, method.integrator)
         driven_stop_margins(sub, rows_closed, starts)
         rows[closed] = rows_closed
     integrated = ~closed
@@ -489,16 +493,13 @@ def solve_cases(cases, method, stability=False, starts=1):
                 block = TANGENT_SYSTEMS.get((m, t), block)
             sub = np.ascontiguousarray(cases[chosen])
             # auto keeps two DOPRI5 solves where the multipliers are asked for: the tangent
-            # is integrated, and its error needs their estimate (an ill-conditioned blade
-            # multiplier moved 1.2e-4 between tangents at rtol 1e-9 and 1e-13)
+            # is integrated, and its error needs their estimate (estimated_error)
             exact = (m, t) in EXACT_FLIGHTS and (
                 method.integrator == INTEGRATOR_CLOSED
                 or method.integrator == INTEGRATOR_AUTO and not stability)
             if exact:
                 out = solve_exact(block, sub, method.tol, method.max_impacts, starts)
-                out[:, ROW.error] = np.where(
-                    out[:, ROW.outcome] == SEQUENCE_CYCLE,
-                    0.0 if method.integrator == INTEGRATOR_AUTO else np.nan, np.nan)
+                out[:, ROW.error] = closed_form_estimate(out, method.integrator)
             elif method.integrator == INTEGRATOR_AUTO:
                 out = solve_auto(block, sub, method.tol, method.max_impacts, starts)
             else:

@@ -36,8 +36,7 @@ from kernels.impact.events import make_bisection, make_locator
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW, Counters)
 from kernels.impact.runge_kutta import (METHOD_EXACT, accepted_step_size, ballistic_cap,
-                                        initial_step, integrated, make_stepper,
-                                        rejected_step_size)
+                                        initial_step, make_stepper, rejected_step_size)
 from kernels.impact.tuples import hermite, hermite_slope
 
 POLISH_ITERATIONS = 4
@@ -155,13 +154,14 @@ def make_flight(system):
 
     @njit(**INNER_OPTIONS)
     def flight(t0, y0, p, data, settings, refine):
-        method = integrated(settings.method, bool(has_exact))
-        rtol, atol = settings.rtol, settings.atol
+        method, rtol, atol = settings.method, settings.rtol, settings.atol
+        # exact steps (runge_kutta.METHOD_EXACT) are as long as the event search allows
+        exact_steps = has_exact and method == METHOD_EXACT
         slack = max(100.0 * atol, 1e-10)  # how far beyond a level a step may start (events.py)
         t, y = t0, y0
         f = rhs(y, p)
         angle, rate, accel = monitor(t, y, f)
-        if method == METHOD_EXACT:
+        if exact_steps:
             h = exact_length(y, p, settings.dt)
         else:
             h = initial_step(method, settings.dt, rate, rtol)
@@ -248,7 +248,7 @@ def make_flight(system):
                 t += skip
             t, y, f, angle = t + h, y1, f1, angle1
             start = end if skip == 0.0 else events_at(t, y, f, data)
-            if method == METHOD_EXACT:
+            if exact_steps:
                 h = exact_length(y, p, settings.dt)
             else:
                 h, err_prev = accepted_step_size(method, h, settings.dt, err, after_reject,
@@ -271,8 +271,7 @@ def make_timed_flight(rhs, scales):
 
     @njit(**INNER_OPTIONS)
     def timed_flight(t0, y0, t1, p, settings):
-        method = integrated(settings.method, bool(False))
-        rtol, atol = settings.rtol, settings.atol
+        method, rtol, atol = settings.method, settings.rtol, settings.atol
         t, y = t0, y0
         if not t1 > t0:
             return t1 == t0, y0

@@ -16,7 +16,10 @@ from numba import njit
 from kernels import INNER_OPTIONS
 from kernels.impact.tuples import error_norm, lincomb, weighted
 
-#: METHOD_EXACT: the system's closed-form flow (``exact``), where it has one; DOPRI5 where not
+#: METHOD_EXACT: the system's closed-form flow (``exact``), where it has one. The one rule
+#: for the three: a method that is not RK4 is DOPRI5 (step, first step, controller) unless
+#: the system has an exact flow and METHOD_EXACT is asked for (the slides and the tangent
+#: of a closed-form flight are integrated by DOPRI5)
 METHOD_RK4, METHOD_DOPRI5, METHOD_EXACT = 0, 1, 2
 
 # Dormand-Prince 5(4): nodes are implicit in the stages; weights b (5th order), and the
@@ -39,7 +42,7 @@ def _no_exact(y, h, p):
 def make_stepper(rhs, scales, exact=None):
     """The step of the methods, specialised to rhs, the error scales and, where the system
     has one, its exact flow ``exact(y, h, p)`` (its error estimate is 0); a system without
-    one takes DOPRI5's step for METHOD_EXACT (the tangent's and the slide's flights)."""
+    one takes DOPRI5's step for METHOD_EXACT (the rule at METHOD_EXACT)."""
     has_exact = exact is not None
     exact = exact if has_exact else _no_exact
 
@@ -79,18 +82,11 @@ def make_stepper(rhs, scales, exact=None):
 
 
 @njit(**INNER_OPTIONS)
-def integrated(method, has_exact):
-    """The method a flight steps with: METHOD_EXACT only where the system has an exact
-    flow, DOPRI5 for it elsewhere."""
-    return METHOD_DOPRI5 if method == METHOD_EXACT and not has_exact else method
-
-
-@njit(**INNER_OPTIONS)
 def initial_step(method, dt, speed, rtol):
     """First step: dt for RK4; for DOPRI5 rtol^(1/5) of the time to move a unit of the
     state at ``speed``, the step an order-5 method keeps at that tolerance (fewer rejections
     while ramping up)."""
-    if method != METHOD_DOPRI5:
+    if method == METHOD_RK4:
         return dt
     return min(0.1, max(rtol, 1e-14) ** 0.2 / max(1.0, abs(speed)))
 
@@ -119,7 +115,7 @@ def rejected_step_size(h, err, err_prev, t):
 def accepted_step_size(method, h, dt, err, after_reject, err_prev):
     """The next step after an accepted one: (h, err_prev) from the DOPRI5 controller, or dt
     for RK4 (a first step cut short by the ballistic-return cap is the only short one)."""
-    if method == METHOD_DOPRI5:
+    if method != METHOD_RK4:
         return next_step(h, err, after_reject, err_prev), err
     return dt, err_prev
 
