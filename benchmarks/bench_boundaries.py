@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from sweep import boundaries, engine, runner, spec  # noqa: E402
+from sweep import refinement as boundaries, engine, runner, spec  # noqa: E402
 
 CASES = {
     "crank_rocker (types a, b)": (

@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks.auto_cases import KERNEL, MECH, OUT, blade_points  # noqa: E402
 from sweep import engine, spec  # noqa: E402
-from sweep.cli import _example_text  # noqa: E402
+from sweep.api import example_text as _example_text  # noqa: E402
 
 VALUES = ("impact_speed", "impact_interval", "amplitude", "acceleration_peak")
 

@@ -22,7 +22,7 @@ INLINE_OPTIONS = dict(INNER_OPTIONS, inline="always")
 # constant) as its own type, Literal[int](0), and an omitted default as another, and
 # compiles the callee, with everything it calls, once for each. So a call between kernels
 # passes int(0), bool(True), int(CONSTANT) and every optional argument: the stability
-# example had compiled its whole driver twice (66 -> 56 s). A variable first set to a
+# example had compiled its whole driver twice. A variable first set to a
 # literal compiles the callee for the literal too, while numba's typing settles: set it
 # with bool(False). tests/test_boundary.py checks that each function compiles once.
 

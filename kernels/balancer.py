@@ -69,7 +69,7 @@ DECLARATION = Mechanism(
         Output("acceleration_invariant_rigid", "1", "peak rocker acceleration invariant "
                "max |d2 gamma/d theta2| (rigid shaft)"),
         Output("harmonics_used", "1", "harmonics of the rocker motion used",
-               diagnostic=True),
+               diagnostic=True, count=True),
         Output("truncation_error", "1", "estimated relative truncation error of the "
                "acceleration metrics", diagnostic=True),
         Output("resonance_margin", "1", "distance to the nearest resonance, min |D_n|/K"),

@@ -129,7 +129,7 @@ DECLARATION = Mechanism(
         Output("special_crank_angle", "rad", "crank angle of the impact special position "
                "(phi1*)", "φ1*"),
         Output("special_position_count", "1", "number of special positions per crank "
-               "turn", diagnostic=True),
+               "turn", diagnostic=True, count=True),
         Output("restitution_kinematic_max", "1", "largest |Rk| reachable with this rocker "
                "ratio (type b only)"),
     ),

@@ -107,7 +107,11 @@ class Output:
     diagnostic: bool = False  # a count or estimate of the computation, not a design value
     #: computed only when a spec lists it in ``outputs`` (it costs work the others do not)
     on_request: bool = False
-
+    #: a whole-number count: a chart draws it as categories where it takes few values
+    count: bool = False
+    #: (units, factor) a chart shows the output in instead of its own: ("turn", 1/(2 pi))
+    #: for a rotor angle of many turns
+    chart_units: tuple | None = None
 
     @property
     def is_flag(self) -> bool:

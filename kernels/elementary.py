@@ -1,7 +1,7 @@
 """Small elementary functions for kernels where libm is the bottleneck.
 
-numba calls the platform libm for math.atan2 (~27 ns per call here, scalar), while numpy's
-SIMD arctan2 takes ~2.5 ns: in a closed-form kernel two atan2 calls were 40 % of the time.
+numba calls the platform libm for math.atan2 (scalar), about ten times the cost of numpy's
+SIMD arctan2: in a closed-form kernel two atan2 calls took a large share of the time.
 ``atan2_fast`` is the classical three-interval reduction with a degree-4/5 rational
 approximation on |x| <= tan(pi/8) (Moshier's Cephes scheme), accurate to ~2 ulp
 (tests/test_elementary.py checks it against math.atan2 over random and special inputs).

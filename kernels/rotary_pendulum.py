@@ -133,11 +133,12 @@ DECLARATION = Mechanism(
                "state (V* = 2 (1+k) omega1 l2/(1-R) on the rotor stop at constant speed)",
                "V*"),
         Output("impact_interval", "rad", "rotor angle between impacts in steady state "
-               "(tau1; on the blade, between the impacts opening each contact)", "τ1"),
+               "(tau1; on the blade, between the impacts opening each contact)", "τ1",
+               chart_units=("turn", 1.0 / (2.0 * math.pi))),
         Output("impacts_to_converge", "1", "impacts from rest to the steady state (to "
                "1e-12 by the closed form, to 10 rtol when integrated; the rotor model on "
                "its stop: estimated past its extrapolated transient, within 3 impacts or "
-               "35 %), or until escape", diagnostic=True),
+               "35 %), or until escape", diagnostic=True, count=True),
         Output("acceleration_peak", "rad s-2", "peak relative angular acceleration of the "
                "pendulum in steady state", "|ψ''|max"),
         Output("restitution_critical", "1", "largest R with a periodic impact regime "
@@ -148,10 +149,11 @@ DECLARATION = Mechanism(
         Output("n_steps", "1", "integration steps, accepted and rejected (0: closed form on "
                "the rotor stop; the rigid model's closed-form flights on the blade count "
                "their exact steps)",
-               diagnostic=True),
+               diagnostic=True, count=True),
         Output("n_rejected", "1", "rejected integration steps among n_steps",
-               diagnostic=True),
-        Output("n_events", "1", "impact events located by the integrator", diagnostic=True),
+               diagnostic=True, count=True),
+        Output("n_events", "1", "impact events located by the integrator", diagnostic=True,
+               count=True),
         Output("method_used", "1", "method that produced the values",
                flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5}),
         Output("multiplier_modulus", "1", "largest modulus |mu| of the multipliers of the "
@@ -175,7 +177,7 @@ DECLARATION = Mechanism(
         Output("attractor_count", "1", "distinct steady states reached from method.starts "
                "starting states (rest, then a Halton sequence of arrival states): regime, "
                "period and section state equal to 1e-6; each non-periodic outcome counts "
-               "as one", on_request=True),
+               "as one", on_request=True, count=True),
         Output("basin_fraction", "1", "share of the starts that reach the steady state "
                "reported (the one reached from rest, the machine's start-up)",
                on_request=True),
@@ -316,8 +318,8 @@ def rows_repeat(words, first, inverse):
 def distinct_rows(keys):
     """(distinct rows, index of each row's distinct row): a 1-D unique on row hashes of the
     bit patterns (-0.0 counts as 0.0), checked row by row, bit for bit (np.unique(axis=0)
-    sorts structured rows and cost 85 % of a closed-form block; the same check in numpy,
-    with its temporaries, took this function from 9.5 to 20 ms per 10^5 rows); a hash
+    sorts structured rows and cost most of a closed-form block; the same check in numpy,
+    with its temporaries, doubled this function's time); a hash
     collision, or NaNs with other bits, falls back to the exact sort."""
     words = np.ascontiguousarray(keys + 0.0).view(np.uint64)
     _, first, inverse = np.unique(row_hashes(words), return_index=True, return_inverse=True)

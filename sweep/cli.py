@@ -1,5 +1,4 @@
-"""The ``sweep`` command line (README, "The command line"): run, examples, parameters, info,
-query, chart, profile, boundaries.
+"""The ``sweep`` command line: a thin layer over the Python API (``sweep.api``).
 
 Exit status 0 on success, 2 on bad input (one line naming the field), 1 on a failure inside.
 """
@@ -9,66 +8,55 @@ from __future__ import annotations
 import os
 import sys
 import time
-from importlib import resources
 from pathlib import Path
 
 import click
 
+from sweep import api
 from sweep.errors import UserError
 
-#: the built-in specs: every TOML file of the package sweep.examples, by its stem
-EXAMPLES = {entry.name[:-len(".toml")]: entry.name
-            for entry in resources.files("sweep.examples").iterdir()
-            if entry.name.endswith(".toml")}
 DEFAULT_EXAMPLE = "crank_rocker"
+EXIT_CODES = ("Exit status: 0 success; 2 bad input (one line naming the field, before any "
+              "compute, nothing written); 1 a failure inside (one line; SWEEP_DEBUG=1 shows "
+              "the traceback).")
+CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
 
 
-def _example_text(name: str) -> str:
-    return resources.files("sweep.examples").joinpath(EXAMPLES[name]).read_text("utf-8")
+def _epilog(*examples: str) -> str:
+    """A command's help ending: its examples, then the exit codes. \b keeps click from
+    re-wrapping the example lines."""
+    return ("\b\nExamples:\n" + "\n".join(f"  {e}" for e in examples) + "\n\n" + EXIT_CODES)
 
 
-def _open_netcdf(path: str, what: str):
-    import xarray as xr
-
-    p = Path(path)
-    if not p.is_file():
-        raise UserError(f"{what}: no such file: {p}")
-    try:
-        return xr.open_dataset(p, engine="netcdf4")
-    except Exception as err:  # netCDF4 raises OSError/RuntimeError/ValueError alike
-        raise UserError(f"{what}: {p} is not a readable netCDF file "
-                        f"({type(err).__name__})") from None
-
-
-def _is_boundaries(ds) -> bool:
-    return "grid_point" in ds and "variable" in ds.attrs
-
-
-def _open_atlas(path: str):
-    ds = _open_netcdf(path, "atlas")
-    p = Path(path)
-    if _is_boundaries(ds):
-        raise UserError(f"atlas: {p} holds the boundaries of an atlas, not an atlas; "
-                        "`sweep info` describes it")
-    if "status" not in ds or "mechanism" not in ds.attrs:
-        raise UserError(f"atlas: {p} is not an impact-sweep atlas (no status or mechanism)")
-    return ds
-
-
-def _open_boundaries(path: str):
-    ds = _open_netcdf(path, "boundaries")
-    if not _is_boundaries(ds):
-        raise UserError(f"boundaries: {path} was not written by `sweep boundaries`")
-    return ds
-
-
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(context_settings=CONTEXT, epilog=_epilog(
+    "sweep run                          # the built-in default sweep",
+    "sweep examples rotary_pendulum -o rp.toml && sweep run rp.toml",
+    "sweep query rp.nc --where 'regime == \"period_1\"' --sort impact_speed --desc"))
 @click.version_option(package_name="impact-sweep")
 def cli():
-    """Batch sweeps of impact mechanisms into CF-annotated netCDF design atlases."""
+    """Batch sweeps of impact mechanisms into CF-annotated netCDF design atlases.
+
+    The same functions are a Python API: import sweep; help(sweep)."""
 
 
-@cli.command()
+def _spec(spec_file: str | None):
+    from sweep import spec
+
+    if spec_file is None:
+        return spec.parse(api.example_text(DEFAULT_EXAMPLE), source="default spec")
+    path = Path(spec_file)
+    if not path.exists() and path.suffix != ".toml" and spec_file in api.examples():
+        raise UserError(f"spec: no such file: {spec_file}; it is the name of a built-in "
+                        f"example: `sweep examples {spec_file} -o {spec_file}.toml` writes it, "
+                        f"then `sweep run {spec_file}.toml`")
+    return spec.load(spec_file)
+
+
+@cli.command(short_help="Run a sweep into a design atlas (netCDF), with its chart.",
+             epilog=_epilog("sweep run                       # default: crank_rocker_atlas.nc",
+                            "sweep run cr.toml -o cr.nc --force",
+                            "sweep run big.toml -o big.nc --resume   # after an interruption",
+                            "sweep run cr.toml --scheduler tcp://10.0.0.5:8786"))
 @click.argument("spec_file", required=False, metavar="[SPEC]")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="atlas file (.nc)")
 @click.option("--force", is_flag=True, help="overwrite an existing atlas")
@@ -79,71 +67,41 @@ def cli():
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="run on a dask.distributed cluster, e.g. tcp://10.0.0.5:8786")
 def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
-    """Run a sweep; with no SPEC, the built-in default (the crank-rocker design atlas)."""
-    from sweep import runner, spec, store
+    """Run a sweep; with no SPEC, the built-in default (the crank-rocker design atlas).
+
+    The atlas is written atomically; every finished block is kept beside it until then, so
+    an interrupted run continues with --resume. A spec's [chart] is drawn beside the atlas
+    (ATLAS.png)."""
     from sweep.metadata import file_status_counts
 
-    if spec_file is None:
-        sweep_spec = spec.parse(_example_text(DEFAULT_EXAMPLE), source="default spec")
-        target = Path(output or f"{DEFAULT_EXAMPLE}_atlas.nc")
-    else:
-        sweep_spec = spec.load(spec_file)
-        target = Path(output or Path(spec_file).with_suffix(".nc").name)
-    if target.suffix != ".nc":
-        raise UserError(f"output: {target} must end in .nc")
-    store.check_target(target, force or resume)
-    if resume and target.exists():
-        raise UserError(f"resume: {target} is already complete")
-    chart_path = target.with_suffix(".png") if sweep_spec.chart else None
-    if chart_path is not None and chart_path.exists() and not force:
-        raise UserError(f"output: {chart_path} exists; use --force to overwrite it")
-    bounds_path = (bounds_target(target) if sweep_spec.chart and sweep_spec.chart.boundaries
-                   else None)
-    if bounds_path is not None:
-        store.check_target(bounds_path, force)
-
+    sweep_spec = _spec(spec_file)
+    default = f"{DEFAULT_EXAMPLE}_atlas.nc" if spec_file is None else \
+        Path(spec_file).with_suffix(".nc").name
+    target = Path(output if output is not None else default)
     started = time.perf_counter()
-    done = runner.run_sweep(sweep_spec, target, chunk=chunk, workers=workers,
-                            scheduler=scheduler, progress=not quiet, resume=resume,
-                            force=force)
+    done = api.write(sweep_spec, target, force=force, resume=resume, chunk=chunk,
+                     workers=workers, scheduler=scheduler, progress=not quiet)
     elapsed = time.perf_counter() - started
-    # opened (with xarray) only for what reads it: the boundaries and the chart
-    written = _open_atlas(str(target)) if bounds_path or chart_path else None
-    bounds = None
-    if bounds_path is not None:
-        from sweep.boundaries import refine
-
-        bounds = refine(written, sweep_spec.chart.boundaries, target=bounds_path,
-                        workers=workers, force=True, progress=not quiet)
-    if chart_path is not None:
-        from sweep.chart import design_chart
-
-        c = sweep_spec.chart
-        design_chart(written, c.x, c.y, c.color, chart_path, at=c.at_values(),
-                     boundaries=bounds, overlay=c.overlay)
-    if not quiet:
-        counts = file_status_counts(target)
-        click.echo(f"atlas: {target.resolve()}")
-        if bounds_path is not None:
-            click.echo(f"boundaries: {bounds_path.resolve()} ({bounds.sizes['crossing']:,} "
-                       f"crossings of {sweep_spec.chart.boundaries})")
-        if chart_path is not None:
-            click.echo(f"chart: {chart_path.resolve()}")
-        if done["reused"]:
-            click.echo(f"resumed: {done['reused']} of {done['blocks']} blocks were already "
-                       "done")
-        click.echo(f"{sweep_spec.size} points in {elapsed:.2f} s; status: "
-                   + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
-    if written is not None:
-        written.close()
+    if quiet:
+        return
+    counts = file_status_counts(target)
+    click.echo(f"atlas: {target.resolve()}")
+    if done["boundaries"] is not None:
+        click.echo(f"boundaries: {done['boundaries'].resolve()} ({done['crossings']:,} "
+                   f"crossings of {sweep_spec.chart.boundaries})")
+    if done["chart"] is not None:
+        click.echo(f"chart: {done['chart'].resolve()}")
+    if done["reused"]:
+        click.echo(f"resumed: {done['reused']} of {done['blocks']} blocks were already done")
+    click.echo(f"{sweep_spec.size} points in {elapsed:.2f} s; status: "
+               + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
 
 
-def bounds_target(atlas: Path) -> Path:
-    """Where the boundaries of an atlas go by default: ATLAS.bounds.nc beside it."""
-    return atlas.with_name(atlas.stem + ".bounds.nc")
-
-
-@cli.command()
+@cli.command(short_help="Refine the boundaries of a flag (status, regime) to a tolerance.",
+             epilog=_epilog("sweep boundaries cr.nc                    # status, to 1e-8",
+                            "sweep boundaries rp.nc --var regime --tol 1e-10",
+                            "sweep chart cr.nc --x R --y largest_link --color status "
+                            "--boundaries cr.bounds.nc"))
 @click.argument("atlas_file", metavar="ATLAS")
 @click.option("--var", default="status", show_default=True,
               help="flag variable whose boundaries are refined (status, regime, ...)")
@@ -160,24 +118,17 @@ def boundaries(atlas_file, var, tol, output, force, resume, chunk, workers, quie
     """Refine every boundary of a flag variable of an atlas (where status or regime changes
     between neighbouring grid points) to a tolerance, by bisection through the same
     kernels; write the crossings, with what explains each, to a companion netCDF."""
-    from sweep.boundaries import refine
-
-    ds = _open_atlas(atlas_file)
-    target = Path(output) if output else bounds_target(Path(atlas_file))
-    if target.suffix != ".nc":
-        raise UserError(f"output: {target} must end in .nc")
-    if target.resolve() == Path(atlas_file).resolve():
-        raise UserError("output: would overwrite the atlas itself")
-    started = time.perf_counter()
-    result = refine(ds, var, tol, target=target, workers=workers, chunk=chunk,
-                    resume=resume, force=force, progress=not quiet)
-    ds.close()
-    if quiet:
-        return
     import collections
 
-    from sweep.query import flag_names
+    from sweep.selection import flag_names
 
+    target = Path(output) if output is not None else api.bounds_target(Path(atlas_file))
+    started = time.perf_counter()
+    with api.open_atlas(atlas_file) as ds:
+        result = api.boundaries(ds, var, tol, path=target, workers=workers, chunk=chunk,
+                                resume=resume, force=force, progress=not quiet)
+    if quiet:
+        return
     meaning = flag_names(result["side_below"])
     pairs = collections.Counter(
         f"{meaning[int(a)]} | {meaning[int(b)]}" for a, b in
@@ -196,88 +147,59 @@ def boundaries(atlas_file, var, tol, output, force, resume, chunk, workers, quie
                    "followed (see edge_crossings)")
 
 
-@cli.command()
+@cli.command(short_help="List the built-in specs, or print or write one as TOML.",
+             epilog=_epilog("sweep examples", "sweep examples rotary_pendulum",
+                            "sweep examples six_link -o six.toml"))
 @click.argument("name", required=False)
 @click.option("-o", "--output", type=click.Path(dir_okay=False), help="write the TOML here")
-def examples(name, output):
+@click.option("--force", is_flag=True, help="overwrite an existing file")
+def examples(name, output, force):
     """List the built-in specs, or print (or write) one of them as TOML."""
+    from sweep.store import atomic, check_target
+
     if name is None:
-        import tomllib
-        width = max(map(len, EXAMPLES))
-        for key in sorted(EXAMPLES):
-            title = tomllib.loads(_example_text(key)).get("title", "")
+        titles = api.examples()
+        width = max(map(len, titles))
+        for key, title in titles.items():
             click.echo(f"{key:{width}s}  {title}")
         return
-    if name not in EXAMPLES:
-        raise UserError(f"name: unknown example {name!r}; allowed: {', '.join(EXAMPLES)}")
-    text = _example_text(name)
-    if output:
-        if Path(output).exists():
-            raise UserError(f"output: {output} exists")
-        Path(output).write_text(text, encoding="utf-8")
+    api.example(name)  # an unknown name is refused with the list
+    text = api.example_text(name)
+    if output is not None:
+        target = Path(output)
+        check_target(target, force, suffix=".toml")
+        with atomic(target) as tmp:
+            tmp.write_text(text, encoding="utf-8")
         click.echo(f"wrote {output}")
     else:
         click.echo(text, nl=False)
 
 
-@cli.command()
+@cli.command(short_help="A mechanism's parameters, method keys, outputs and statuses.",
+             epilog=_epilog("sweep parameters", "sweep parameters rotary_pendulum"))
 @click.argument("mechanism", required=False)
 def parameters(mechanism):
     """List the mechanisms, or one mechanism's parameters, method keys, outputs and
     statuses with units, defaults and allowed values."""
-    from sweep import registry
-
-    if mechanism is None:
-        for name in registry.names():
-            click.echo(f"{name:17s} {registry.get(name).declaration.title}")
-        return
-    if mechanism not in registry.names():
-        raise UserError(f"mechanism: unknown mechanism {mechanism!r}; allowed: "
-                        + ", ".join(registry.names()))
-    from sweep.describe import mechanism_text
-
-    click.echo(mechanism_text(registry.get(mechanism).declaration))
+    click.echo(api.parameters(mechanism))
 
 
-@cli.command()
+@cli.command(short_help="What an atlas (or boundaries file) holds and how it was made.",
+             epilog=_epilog("sweep info crank_rocker_atlas.nc", "sweep info cr.bounds.nc"))
 @click.argument("atlas_file", metavar="ATLAS")
 def info(atlas_file):
     """What an atlas's designs were computed with (grid, fixed parameters and method, in words
     and units), the range of every output, status counts and provenance; for a boundaries
     file, its crossings by sides with what explains them."""
-    from sweep import registry
-    from sweep.describe import atlas_text, boundaries_text
-
-    ds = _open_netcdf(atlas_file, "atlas")
-    if _is_boundaries(ds):
-        click.echo(boundaries_text(ds, atlas_file))
-        return
-    ds.close()
-    ds = _open_atlas(atlas_file)
-    name = ds.attrs.get("mechanism", "")
-    mech = registry.get(name).declaration if name in registry.names() else None
-    click.echo(atlas_text(ds, atlas_file, mech))
+    click.echo(api.info(atlas_file))
 
 
-def _at_values(pairs) -> dict[str, float]:
-    """--at DIM=VALUE options as a dict (the value in the axis's own units)."""
-    at = {}
-    for pair in pairs:
-        dim, sep, value = pair.partition("=")
-        value = value.strip()
-        unit = "deg" if value.endswith(("deg", "°")) else ""
-        try:
-            number = float(value.removesuffix("deg").removesuffix("°"))
-        except ValueError:
-            sep = ""
-        if not sep:
-            raise UserError(f"at: {pair!r} must be AXIS=NUMBER in the axis's units, or "
-                            "NUMBERdeg for an angle, e.g. crank_angle=90deg")
-        at[dim.strip()] = (number, unit)
-    return at
-
-
-@cli.command()
+@cli.command(short_help="Select designs from an atlas with a safe expression language.",
+             epilog=_epilog(
+                 "sweep query cr.nc --where 'status == \"ok\" and lambda2 <= 3' "
+                 "--sort impact_speed --desc --limit 10",
+                 "sweep query lf.nc --columns force_peak_D,F21_n --at crank_angle=90deg",
+                 "sweep query cr.nc --format csv > designs.csv"))
 @click.argument("atlas_file", metavar="ATLAS")
 @click.option("--where", "where", default=None, help='condition, e.g. "lambda2 <= 3"')
 @click.option("--sort", default=None, help="variable to sort by (ascending; see --descending)")
@@ -297,18 +219,19 @@ def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt)
     meanings, the table prints units under its header."""
     import json
 
-    from sweep.query import in_degrees, parse, select, units_of
+    from sweep.selection import at_values, in_degrees, parse, units_of
 
     if where is not None:
         parse(where)  # syntax errors before the atlas is read
-    at_values = _at_values(at)
-    ds = _open_atlas(atlas_file)
+    at_values(list(at))
     cols = [c.strip() for c in columns.split(",") if c.strip()] if columns else None
-    frame = select(ds, where, sort=sort, limit=limit, columns=cols, descending=descending,
-                   at=at_values)
-    matched = frame.attrs["matched"]
-    if degrees:
-        frame = in_degrees(ds, frame)
+    with api.open_atlas(atlas_file) as ds:
+        frame = api.query(ds, where, sort=sort, limit=limit, columns=cols,
+                          descending=descending, at=list(at))
+        matched = frame.attrs["matched"]
+        if degrees:
+            frame = in_degrees(ds, frame)
+        units = units_of(ds, frame.columns, degrees)
     if fmt == "csv":
         click.echo(frame.to_csv(index=False), nl=False)
     elif fmt == "json":
@@ -322,24 +245,28 @@ def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt)
     else:
         import pandas as pd
 
-        units = units_of(ds, frame.columns, degrees)
         header = pd.MultiIndex.from_arrays([list(frame.columns),
                                             [f"[{'-' if u == '1' else u}]" if u else ""
                                              for u in units]])
         click.echo(frame.set_axis(header, axis=1).to_string(index=False))
     if fmt == "table" or (limit is None and len(frame) > 50):
-        total = matched
-        shown = f"{len(frame):,} of {total:,} matching points" if len(frame) < total else \
-            f"{total:,} matching points"
+        shown = f"{len(frame):,} of {matched:,} matching points" if len(frame) < matched else \
+            f"{matched:,} matching points"
         click.echo(shown, err=fmt != "table")
 
 
-@cli.command()
+@cli.command(short_help="A design chart (PNG) of one output over two grid axes.",
+             epilog=_epilog(
+                 "sweep chart cr.nc --x R --y largest_link --color impact_speed -o v.png",
+                 "sweep chart rp.nc --x k --y R --color regime --at omega1=60",
+                 "sweep chart blade.nc --x tool_window --y R --color regime "
+                 "--overlay stability_margin"))
 @click.argument("atlas_file", metavar="ATLAS")
 @click.option("--x", "x", required=True, help="variable on the x axis")
 @click.option("--y", "y", required=True, help="variable on the y axis")
 @click.option("--color", required=True, help="variable shown in colour")
-@click.option("-o", "--output", type=click.Path(dir_okay=False), default="chart.png")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default="chart.png",
+              show_default=True)
 @click.option("--all-status", is_flag=True,
               help="also colour points whose status has no design values")
 @click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
@@ -350,44 +277,57 @@ def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt)
 @click.option("--overlay", default=None, metavar="NAME",
               help="a numeric output drawn as labelled contour lines on top, e.g. "
                    "stability_margin over the regime")
-def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file, overlay):
+@click.option("--force", is_flag=True, help="overwrite an existing PNG")
+def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file, overlay,
+          force):
     """Design chart (PNG) of COLOR over X and Y, with units; a flag variable (regime,
     status) is drawn as categories, cells without a value in greys named by their status."""
-    from sweep.chart import design_chart
+    from sweep.selection import at_values
+    from sweep.store import check_target
 
-    if not output.endswith(".png"):
-        raise UserError(f"output: {output} must end in .png")
-    at_values = _at_values(at)
-    ds = _open_atlas(atlas_file)
-    bounds = _open_boundaries(bounds_file) if bounds_file else None
-    path = design_chart(ds, x, y, color, Path(output), ok_only=not all_status,
-                        degrees=not radians, at=at_values, boundaries=bounds,
-                        overlay=overlay).path
-    click.echo(f"chart: {path.resolve()}")
+    check_target(Path(output), force, suffix=".png")
+    at_values(list(at))
+    with api.open_atlas(atlas_file) as ds:
+        bounds = api.open_boundaries(bounds_file) if bounds_file else None
+        api.chart(ds, x, y, color, path=output, all_status=all_status,
+                  degrees=not radians, at=list(at), boundaries=bounds, overlay=overlay,
+                  force=force)
+    click.echo(f"chart: {Path(output).resolve()}")
 
 
-@cli.command()
+@cli.command(short_help="A chart of profiles (over the crank angle) at one grid point.",
+             epilog=_epilog("sweep profile lf.nc --vars F21_n,F34_n,balancing_moment "
+                            "--where 'omega1 == 30'",
+                            "sweep profile six.nc --vars rocker_angle --radians"))
 @click.argument("atlas_file", metavar="ATLAS")
 @click.option("--vars", "names", required=True, help="comma-separated profile variables")
 @click.option("--where", default=None, help="condition picking the grid point (first match)")
-@click.option("-o", "--output", type=click.Path(dir_okay=False), default="profile.png")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default="profile.png",
+              show_default=True)
 @click.option("--radians", is_flag=True, help="angles in radians, ticks at multiples of pi/2")
-def profile(atlas_file, names, where, output, radians):
-    """Chart of profiles (e.g. joint reactions over crank_angle) at one grid point."""
-    from sweep.chart import profile_chart
-    from sweep.query import parse
+@click.option("--force", is_flag=True, help="overwrite an existing PNG")
+def profile(atlas_file, names, where, output, radians, force):
+    """Chart of profiles (e.g. joint reactions over crank_angle) at one grid point: one
+    panel per unit."""
+    from sweep.selection import parse
+    from sweep.store import check_target
 
-    if not output.endswith(".png"):
-        raise UserError(f"output: {output} must end in .png")
+    check_target(Path(output), force, suffix=".png")
     if where is not None:
         parse(where)
-    ds = _open_atlas(atlas_file)
-    path, at = profile_chart(ds, [n.strip() for n in names.split(",") if n.strip()], where,
-                             Path(output), degrees=not radians)
-    click.echo(f"profile at {at}: {path.resolve()}")
+    with api.open_atlas(atlas_file) as ds:
+        fig = api.profile(ds, names, where, path=output, degrees=not radians, force=force)
+    click.echo(f"profile at {fig.grid_point}: {Path(output).resolve()}")
+
+
+def debugging() -> bool:
+    """SWEEP_DEBUG=1 (or true, yes, on) shows a failure's traceback; 0 or empty does not."""
+    return os.environ.get("SWEEP_DEBUG", "").strip().lower() in ("1", "true", "yes", "on")
 
 
 def main(argv: list[str] | None = None) -> None:
+    from sweep.resources import RunFailed, RunInterrupted
+
     try:
         cli.main(args=argv, prog_name="sweep", standalone_mode=False)
     except UserError as err:
@@ -396,16 +336,25 @@ def main(argv: list[str] | None = None) -> None:
     except click.exceptions.Exit as err:
         sys.exit(err.exit_code)
     except click.ClickException as err:
-        msg = " ".join(err.format_message().split())
+        msg = str(UserError(err.format_message()))  # one line, long words shortened
         click.echo(f"sweep: error: {msg}", err=True)
         sys.exit(2)
-    except (KeyboardInterrupt, click.exceptions.Abort):
-        click.echo("sweep: interrupted; nothing was written", err=True)
+    except (KeyboardInterrupt, click.exceptions.Abort) as err:
+        # click turns a KeyboardInterrupt into Abort (from it): what the run kept, if any
+        cause = err if isinstance(err, RunInterrupted) else err.__cause__
+        if isinstance(cause, RunInterrupted):
+            click.echo(f"sweep: {cause.message}", err=True)
+        else:
+            click.echo("sweep: interrupted before the run started; nothing was written",
+                       err=True)
         sys.exit(130)
+    except RunFailed as err:
+        click.echo(f"sweep: error: {err}", err=True)
+        sys.exit(1)
     except Exception as err:  # a failure inside: one line, the traceback on request
-        if os.environ.get("SWEEP_DEBUG"):
+        if debugging():
             raise
-        click.echo(f"sweep: internal error: {type(err).__name__}: {err} "
+        click.echo(f"sweep: internal error: {type(err).__name__}: {UserError(str(err))} "
                    "(set SWEEP_DEBUG=1 for the traceback)", err=True)
         sys.exit(1)
     sys.exit(0)

@@ -7,7 +7,7 @@ import textwrap
 import numpy as np
 
 from kernels.declaration import Mechanism, Quantity, used_when_text
-from sweep.query import flag_names
+from sweep.selection import flag_names
 from sweep.spec import domain_text, is_used
 
 

@@ -77,8 +77,8 @@ BLAS_PROBE = "scipy.linalg.cython_blas"
 
 @contextmanager
 def numba_without_blas():
-    """numba's first compile or cache load in a process imports scipy.linalg (0.22 s here, a
-    sixth of a cheap sweep's time beyond the import floor) only to learn whether BLAS is
+    """numba's first compile or cache load in a process imports scipy.linalg (a sizeable
+    share of a cheap sweep's time beyond the import floor) only to learn whether BLAS is
     there; no kernel calls BLAS (np.dot, np.linalg, @). While numba has not looked yet and
     scipy.linalg is not loaded, the probe's import fails for that moment: numba records
     "no BLAS", and scipy imports normally afterwards."""
@@ -206,8 +206,8 @@ class _Definition:
 class Template:
     """What the atlas writer needs of an atlas (the names, dimensions, dtypes, attributes
     and encodings of ``build``'s Dataset, in the same order) without xarray's data model:
-    building an xarray Dataset imports dask to check for dask arrays (0.3 s of a small
-    run). ``metadata.annotate`` fills it as it fills a Dataset."""
+    building an xarray Dataset imports dask to check for dask arrays (a good part of a
+    small run). ``metadata.annotate`` fills it as it fills a Dataset."""
 
     def __init__(self, coords: dict, data: dict):
         self.coords = {name: _Definition(*item) for name, item in coords.items()}

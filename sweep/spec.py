@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import math
+import stat
 import tomllib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -103,6 +104,31 @@ class Sweep:
     def __reduce__(self):
         # rebuilt from the document it came from (deterministic), e.g. on a cluster worker
         return validate, (self.source,)
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> Sweep:
+        """A spec file (TOML), validated: ``Sweep.from_toml("cr.toml")``."""
+        return load(path)
+
+    @classmethod
+    def from_dict(cls, document) -> Sweep:
+        """A spec document as a dict (the TOML's tables as dicts), validated:
+        ``Sweep.from_dict({"mechanism": "crank_rocker", "grid": {"R": [0.2, 0.3]}})``."""
+        if not isinstance(document, dict):
+            try:
+                document = dict(document)
+            except (TypeError, ValueError):
+                raise UserError("spec: a dict of the spec's tables") from None
+        return validate(document)
+
+    @classmethod
+    def from_text(cls, text: str) -> Sweep:
+        """A spec as TOML text, validated."""
+        return parse(text)
+
+    def to_dict(self) -> dict:
+        """The spec with its defaults filled in, as the atlas records it."""
+        return json.loads(self.spec_json())
 
     @property
     def scalar_outputs(self) -> list[str]:
@@ -199,6 +225,10 @@ def check_value(q: Quantity, value) -> str | None:
 
 # ---------------------------------------------------------------- reading a spec
 
+#: a spec file larger than this is not a spec (a grid of values belongs in ranges)
+MAX_SPEC_BYTES = 10 * 1024**2
+
+
 def parse(text: str, source: str = "spec") -> Sweep:
     """Parse and validate a TOML spec; raise UserError with a one-line message."""
     text = text.removeprefix("\ufeff")  # a byte-order mark, as Windows editors write it
@@ -206,17 +236,28 @@ def parse(text: str, source: str = "spec") -> Sweep:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise UserError(f"{source}: invalid TOML: {err}") from None
+    except RecursionError:
+        raise UserError(f"{source}: tables or arrays nested too deeply") from None
     return validate(raw)
 
 
 def load(path: str | Path) -> Sweep:
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        info = path.stat()
     except FileNotFoundError:
         raise UserError(f"spec: no such file: {path}") from None
-    except IsADirectoryError:
-        raise UserError(f"spec: {path} is a directory, not a spec file") from None
+    except OSError as err:
+        raise UserError(f"spec: cannot read {path}: {err.strerror or err}") from None
+    if stat.S_ISDIR(info.st_mode):
+        raise UserError(f"spec: {path} is a directory, not a spec file")
+    if not stat.S_ISREG(info.st_mode):  # a FIFO or a device would block or never end
+        raise UserError(f"spec: {path} is not a regular file")
+    if info.st_size > MAX_SPEC_BYTES:
+        raise UserError(f"spec: {path} is {info.st_size:,} bytes; a spec is at most "
+                        f"{MAX_SPEC_BYTES:,}")
+    try:
+        text = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as err:
         raise UserError(f"spec: cannot read {path}: {err}") from None
     return parse(text, source=str(path))
@@ -224,6 +265,13 @@ def load(path: str | Path) -> Sweep:
 
 def validate(raw: dict) -> Sweep:
     """A spec document (as read from TOML) -> a Sweep, or a one-line UserError."""
+    try:
+        return _validate(raw)
+    except RecursionError:
+        raise UserError("spec: tables or arrays nested too deeply") from None
+
+
+def _validate(raw: dict) -> Sweep:
     model = _structure(raw)
     kernel = _mechanism(model)
     mech = kernel.declaration
@@ -300,16 +348,46 @@ def _known_names(model: SpecModel, mech: Mechanism) -> None:
 
 
 def _grid(model: SpecModel, mech: Mechanism) -> list[Axis]:
-    """The grid axes with their values and kernel codes; the grid's size."""
+    """The grid axes with their values and kernel codes, once the grid's size, counted from
+    the axis specifications, is known to be allowed (nothing is built before)."""
+    size = math.prod(axis_length(f"grid.{name}", entry) for name, entry in model.grid.items())
+    if size > MAX_POINTS:
+        raise UserError(f"grid: {size:.3g} points; at most {MAX_POINTS:.0e} are allowed")
     axes = []
     for name, entry in model.grid.items():
         p = mech.parameter(name)
         labels, values = _axis_values(name, entry, p)
         axes.append(Axis(p, labels, np.array([p.encode(v) for v in values])))
-    size = math.prod(len(a.values) for a in axes)
-    if size > MAX_POINTS:
-        raise UserError(f"grid: {size:.3g} points; at most {MAX_POINTS:.0e} are allowed")
     return axes
+
+
+def axis_length(where: str, entry: Any) -> int:
+    """How many values a grid entry gives, from its specification alone (a range's num, a
+    list's length); its structure is checked, its values are not."""
+    if isinstance(entry, dict):
+        try:
+            return RangeAxis.model_validate(entry).num
+        except ValidationError as err:
+            raise UserError(f"{where}." + _pydantic_message(err)) from None
+    if isinstance(entry, list):
+        if len(entry) > MAX_AXIS:
+            raise UserError(f"{where}: more than {MAX_AXIS} values")
+        return len(entry)
+    raise UserError(f"{where}: must be a table {{start, stop, num[, scale]}} or a list "
+                    "of values")
+
+
+def grid_shape(document: dict) -> tuple[int, ...] | None:
+    """The grid's shape a spec document asks for, from its axis specifications alone (an
+    atlas's recorded spec is compared with the atlas before it is run again); None where
+    the document has no readable grid."""
+    grid = document.get("grid") if isinstance(document, dict) else None
+    if not isinstance(grid, dict):
+        return None
+    try:
+        return tuple(axis_length(f"grid.{name}", entry) for name, entry in grid.items())
+    except UserError:
+        return None
 
 
 def _axis_values(name: str, entry: Any, p: Quantity) -> tuple[np.ndarray, list]:
@@ -477,12 +555,29 @@ def _outputs(model: SpecModel, mech: Mechanism, axes: list[Axis], record) -> lis
 def _chart(model: SpecModel, mech: Mechanism, axes: list[Axis], outputs: list[str]) -> None:
     if model.chart is None:
         return
-    names = {axis.name for axis in axes} | set(outputs)
+    names = {axis.name for axis in axes} | set(outputs) | {"status"}
+    profiles = {p.name for p in mech.profiles}
     for axis in ("x", "y", "color"):
         v = getattr(model.chart, axis)
         if v not in names:
             raise UserError(f"chart.{axis}: {v!r} is neither a grid axis nor an output "
-                            "of this sweep")
+                            "of this sweep (nor status)")
+        if v in profiles:
+            raise UserError(f"chart.{axis}: {v!r} is a profile; pick an output with one "
+                            "value per design")
+    numeric_axes = [a.name for a in axes if not a.parameter.categorical]
+    for axis in ("x", "y"):
+        if getattr(model.chart, axis) not in numeric_axes:
+            raise UserError(f"chart.{axis}: {getattr(model.chart, axis)!r} is not a numeric "
+                            "grid axis; a design chart is drawn over two of them ("
+                            + ", ".join(numeric_axes) + ")")
+    if model.chart.x == model.chart.y:
+        raise UserError(f"chart.y: {model.chart.y!r} is also the x axis; pick two different "
+                        "variables")
+    for axis in ("x", "y"):
+        if getattr(model.chart, axis) in model.chart.at:
+            raise UserError(f"chart.at: {getattr(model.chart, axis)!r} is the chart's {axis} "
+                            "axis; take another axis at one value")
     by_name = {axis.name: axis for axis in axes}
     for name, value in model.chart.at.items():
         axis = by_name.get(name)
@@ -501,9 +596,6 @@ def _chart(model: SpecModel, mech: Mechanism, axes: list[Axis], outputs: list[st
     if model.chart.overlay is not None and model.chart.overlay not in numeric:
         raise UserError(f"chart.overlay: {model.chart.overlay!r} is not a numeric output of "
                         "this sweep; allowed: " + ", ".join(numeric))
-    if model.chart.color in {p.name for p in mech.profiles}:
-        raise UserError(f"chart.color: {model.chart.color!r} is a profile; pick an output "
-                        "with one value per design")
     others = [a.name for a in axes if a.name not in (model.chart.x, model.chart.y)
               and a.name not in model.chart.at and len(a.values) > 1]
     if len(others) > 1:

@@ -9,8 +9,9 @@ import xarray as xr
 from sweep import engine, runner, spec, store
 from sweep.cli import main
 from sweep.errors import UserError
-from sweep.query import evaluate, select
+from sweep.selection import evaluate, select
 from tests.conftest import crank_rocker_point
+from tests.command_line import run_cli
 
 SPEC = '''
 mechanism = "crank_rocker"
@@ -65,6 +66,7 @@ def test_atlas_values_equal_the_kernel_point_by_point(reference):
         np.testing.assert_equal(float(sub[name]), value)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("chunk, workers", [(1, 2), (37, 1), (500, 2), (5000, 2)])
 def test_bit_identical_whatever_chunk_size_and_threads(tmp_path, reference, chunk, workers):
     other = write(tmp_path, f"c{chunk}.nc", chunk=chunk, workers=workers)
@@ -224,11 +226,6 @@ def test_small_grids_get_several_blocks_and_time_scale_axes_stay_whole():
     assert engine.choose_chunks((40, 3, 5), 30, whole=(1,)) == (3, 3, 3)
 
 
-def run_cli(capsys, *args):
-    with pytest.raises(SystemExit) as e:
-        main(list(args))
-    captured = capsys.readouterr()
-    return e.value.code, captured.out, captured.err
 
 
 def test_query_sorts_best_first_and_prints_words_units_and_a_count(reference, capsys):
@@ -299,7 +296,7 @@ def test_the_writers_template_defines_what_the_lazy_dataset_does(example):
     dimensions, dtypes, shapes, attributes and encodings, profiles included."""
     from importlib import resources
 
-    text = (resources.files("sweep.examples") / f"{example}.toml").read_text()
+    text = (resources.files("sweep.example_specs") / f"{example}.toml").read_text()
     s = spec.parse(text)
     lazy, template = engine.build(s), engine.build(s, lazy=False)
     assert list(template.coords) == list(lazy.coords)

@@ -91,6 +91,7 @@ def test_auto_refines_where_its_estimate_misses(rotor_sweep, monkeypatch):
     assert np.max(errors(refined, ref)) < 0.01 * np.max(errors(once, ref))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["rigid", "paper", "rotor"])
 @pytest.mark.parametrize("tol", [1e-3, 1e-6])
 def test_on_the_blade_auto_meets_tol_where_its_estimate_says_so(model, tol):

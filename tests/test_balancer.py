@@ -154,6 +154,7 @@ def _k_dense(f, r, eta, samples=20001):
     return np.abs((basis @ free).real).max() / np.abs(static + (basis @ dev).real).max()
 
 
+@pytest.mark.slow
 def test_fig3_balancing_coefficient_at_f_1():
     rs = (0.4, 0.8, 1.0, 1.6)
     ks = [point(1.0, r, 0.02)[0]["balancing_coefficient"] for r in rs]

@@ -17,9 +17,9 @@ import pytest
 import xarray as xr
 from scipy.optimize import brentq
 
-from sweep import boundaries, cli, runner, spec
+from sweep import refinement as boundaries, cli, runner, spec
 from sweep.errors import UserError
-from sweep.query import flag_names
+from sweep.selection import flag_names
 
 RNG_SEED = 20261123
 
@@ -171,6 +171,7 @@ BLADE = ('mechanism = "rotary_pendulum"\n[grid]\ntool_window = '
          'atol = 1e-13\n')
 
 
+@pytest.mark.slow
 def test_sigkill_mid_run_then_resume_gives_the_same_bits(tmp_path):
     """A real kill (no clean-up runs) after some rounds were kept: --resume finishes from
     the last kept round, to the same file as an uninterrupted run."""
@@ -270,7 +271,7 @@ def test_bad_input_is_one_line_with_exit_2_before_any_compute(tmp_path, capsys, 
 
 
 def test_chart_draws_the_boundaries_and_refuses_another_sweeps(tmp_path):
-    from sweep.chart import boundary_segments, design_chart
+    from sweep.charts import boundary_segments, design_chart
 
     ds = atlas(tmp_path, CRANK)
     result = boundaries.refine(ds, "status", 1e-8)
@@ -300,6 +301,7 @@ def test_spec_chart_boundaries_is_validated():
                    'boundaries = "impact_speed"\n')
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("example", ["linkage_forces", "six_link"])
 def test_boundaries_need_no_profiles_their_scalars_are_the_same_without(example):
     """Boundaries evaluate without profiles (profile_points = 0) so that memory does not grow
@@ -309,7 +311,7 @@ def test_boundaries_need_no_profiles_their_scalars_are_the_same_without(example)
 
     from sweep import engine
 
-    s = spec.parse(resources.files("sweep.examples").joinpath(f"{example}.toml").read_text())
+    s = spec.parse(resources.files("sweep.example_specs").joinpath(f"{example}.toml").read_text())
     assert s.method_record.profile_points > 0
     params = engine.point_parameters(s, np.arange(s.size))
     with_profiles = s.kernel(params, s.method_record)

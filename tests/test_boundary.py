@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 KERNELS = Path(__file__).resolve().parent.parent / "kernels"
 FORBIDDEN = {"xarray", "dask", "distributed", "scipy", "pint", "netCDF4", "h5py",
              "matplotlib", "pandas", "sweep", "click", "pydantic", "zarr"}
@@ -181,6 +183,7 @@ def test_the_cache_stamps_import_scan_agrees_with_the_parser(tmp_path):
         assert found == parsed or path == Path(__file__), (path, found - parsed)
 
 
+@pytest.mark.slow
 def test_cached_kernels_compiled_apart_run_their_own_closures_side_by_side(tmp_path):
     """numba names a compiled function qualname$uid, uid counted from 1 in each process: two
     kernels whose closures come from one factory, compiled each in its own process, shared
@@ -206,6 +209,7 @@ def test_cached_kernels_compiled_apart_run_their_own_closures_side_by_side(tmp_p
     assert run("plus_two(0.0), plus_one(0.0)") == ["4.0", "2.0"]
 
 
+@pytest.mark.slow
 def test_every_kernel_function_compiles_once(tmp_path):
     """A constant argument in a call between kernels (a literal 0, True, or an omitted
     default) makes numba compile the callee once more for that type (kernels/__init__.py):
@@ -215,7 +219,7 @@ def test_every_kernel_function_compiles_once(tmp_path):
     once; the planted pair in tests/compile_once.py shows that a duplicate is seen."""
     import os
 
-    examples = KERNELS.parent / "sweep" / "examples"
+    examples = KERNELS.parent / "sweep" / "example_specs"
     paths = [str(examples / f"{name}.toml") for name in (
         "crank_rocker", "linkage_forces", "six_link", "spring_balancer", "rotary_pendulum")]
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))

@@ -173,6 +173,7 @@ def _two_values(mechanism, p):
     return [d, d * 1.1] if d else [0.0, 0.1]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mechanism", registry.names())
 def test_every_parameter_of_every_mechanism_can_be_swept(mechanism):
     """Each parameter on the grid, through the engine to a Dataset: its coordinate carries

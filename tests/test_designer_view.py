@@ -12,8 +12,8 @@ import pytest
 import xarray as xr
 
 from sweep import registry, runner, spec
-from sweep.chart import design_chart
-from sweep.cli import main
+from sweep.charts import design_chart
+from tests.command_line import run_cli
 
 PENDULUM = '''
 mechanism = "rotary_pendulum"
@@ -49,11 +49,6 @@ def atlas(tmp_path, text, name="a.nc", chunk=None):
     return target
 
 
-def run_cli(capsys, *args):
-    with pytest.raises(SystemExit) as e:
-        main(list(args))
-    out = capsys.readouterr()
-    return e.value.code, out.out, out.err
 
 
 @pytest.fixture(scope="module")
@@ -120,6 +115,7 @@ def test_a_flag_is_drawn_as_categories_with_its_meanings(tmp_path, pendulum):
     assert drawn.panel_titles == [""]  # omega1 taken at one value: one panel
 
 
+@pytest.mark.slow
 def test_a_category_keeps_its_colour_whatever_else_the_chart_holds(tmp_path, pendulum):
     """Colours ranked among the categories present gave period_1 one colour in one blade
     chart and another in the next (an undetermined cell shifted them all): a meaning's
@@ -222,7 +218,7 @@ def test_the_spec_an_atlas_records_runs_again_as_it_is(name):
     """The recorded spec lists only what the design used (a default of an unused parameter,
     such as tool_window on the rotor stop or rtol under auto, used to be recorded and made
     the recorded spec fail validation), and validating it gives the same spec back."""
-    from sweep.cli import _example_text
+    from sweep.api import example_text as _example_text
 
     text = (PENDULUM.replace('model = "paper"\n', "").replace(
         "[grid]", '[grid]\nmodel = ["paper", "rigid"]') if name == "models on the grid"

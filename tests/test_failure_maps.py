@@ -30,6 +30,7 @@ def test_step_end_sign_change_misses_a_contact_shorter_than_a_step(step):
     assert sum(fm.naive_found(step, narrow, p) for p in PHASES) <= 2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("step", [0.3, 0.1, 0.03])
 def test_kernel_detector_misses_only_below_the_interpolation_error(step):
     """Found in every phase when eps >= 10 step^4/384, even with a window of a hundredth
@@ -47,6 +48,7 @@ def test_kernel_detector_misses_only_below_the_interpolation_error(step):
     assert sum(fm.detector_found(step, below, p) for p in PHASES) <= len(PHASES) // 2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rtol", [1e-4, 1e-6, 1e-8])
 def test_dopri5_alone_classifies_escape_right_only_above_rtol(rtol):
     assert fm.separatrix_correct("dopri5", rtol, 10 * rtol) == 2

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from sweep import spec
 from sweep.cli import main
 from sweep.errors import UserError
-from sweep.query import evaluate
+from sweep.selection import evaluate
 
 KEYS = ["mechanism", "grid", "fixed", "method", "run", "outputs", "chart", "title", "R",
         "largest_link", "type", "lambda0", "omega1", "start", "stop", "num", "scale", "chunk",
@@ -35,6 +35,7 @@ def _one_line(err: UserError):
     assert text and "\n" not in text and "Traceback" not in text
 
 
+@pytest.mark.slow
 @settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(DOCS)
 def test_fuzzed_spec_documents_validate_or_fail_in_one_line(doc):

@@ -47,6 +47,14 @@ def fly(model, tool, t, y, data, **settings):
 
 ALL = [(m, t) for m in MODELS for t in ("rotor_stop", "lab_window", "relative_stop")]
 OFF_EQUILIBRIUM = [(m, t) for m in MODELS for t in ("lab_window", "relative_stop")]
+#: the systems a fast run (``./tasks test --fast``) covers where a test takes every system:
+#: each other system costs a compile of its own flight
+FAST = {("paper", "rotor_stop"), ("rigid", "lab_window")}
+
+
+def slow_except_fast(systems):
+    """Every (model, tool) of ``systems``, those outside FAST marked slow."""
+    return [s if s in FAST else pytest.param(*s, marks=pytest.mark.slow) for s in systems]
 
 
 def leaving_start(model, tool):
@@ -60,6 +68,7 @@ def leaving_start(model, tool):
     return twin.state(STOP, -1.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model, tool", ALL)
 def test_located_escape(model, tool):
     """Launched fast enough to go over the top: the flight ends on the escape event, at the
@@ -76,7 +85,7 @@ def test_located_escape(model, tool):
     assert twin.psi(fl.y) == pytest.approx(-math.pi, abs=1e-10)
 
 
-@pytest.mark.parametrize("model, tool", ALL)
+@pytest.mark.parametrize("model, tool", slow_except_fast(ALL))
 def test_H4_no_event_where_a_flight_leaves_the_tool(model, tool):
     """A flight from exactly on the tool, leaving it: no event at its start; its next event
     and time as SciPy's (the polish on exact partial steps gives them to round-off, H5)."""
@@ -202,6 +211,7 @@ def test_H3_a_grazing_contact_is_found(model, tool, eps):
     assert fl.cost.steps < 300  # found inside long steps
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model, tool", OFF_EQUILIBRIUM)
 def test_H6_a_chatter_accumulates_where_scipy_puts_it(model, tool):
     """Bounces at R = 0.5 (0.8 on the test stop, from rest at -0.6: the Zeno example of

@@ -118,6 +118,7 @@ def test_order_of_each_method_measured_by_regression(method, order):
     assert order - 0.25 < slope < order + 0.3, (slope, errors)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("level", [0.9, 0.3, -0.5, -0.99])
 def test_event_time_matches_the_analytic_crossing(level):
     """The oscillator from (1, 0) falls through the level at t = arccos(level)."""
@@ -193,6 +194,7 @@ def test_the_step_budget_ends_a_flight():
     assert fl.outcome == FLIGHT_MAX_STEPS and fl.cost.steps + fl.cost.rejected == 7
 
 
+@pytest.mark.slow
 def test_the_step_size_underflows_at_a_blowup():
     """y' = y^2 from y = 1 blows up at t = 1: DOPRI5's steps shrink until they fall below
     round-off of t, and the flight says so there instead of looping (a NaN error estimate

@@ -88,7 +88,8 @@ def test_profile_chart_cli(tmp_path, capsys):
               "--where", "omega1 == 30 and m3 == 8", "-o", str(png)])
     assert e.value.code == 0 and png.read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(SystemExit) as e:
-        main(["profile", str(tmp_path / "a.nc"), "--vars", "force_peak_B", "-o", str(png)])
+        main(["profile", str(tmp_path / "a.nc"), "--vars", "force_peak_B", "-o", str(png),
+              "--force"])
     assert e.value.code == 2 and "not a profile" in capsys.readouterr().err
 
 

@@ -38,6 +38,7 @@ def same(a, b):
         assert np.array_equal(a[name].values, b[name].values, equal_nan=True), name
 
 
+@pytest.mark.slow
 def test_sigkill_then_resume_gives_the_same_atlas_and_reuses_finished_blocks(tmp_path):
     spec_file = tmp_path / "slow.toml"
     spec_file.write_text(SLOW)
@@ -115,6 +116,7 @@ def test_resumed_blocks_are_not_recomputed(tmp_path):
     same(xr.open_dataset(tmp_path / "r2.nc"), xr.open_dataset(target))
 
 
+@pytest.mark.slow
 def test_distributed_cluster_with_a_worker_killed_gives_the_same_atlas(tmp_path):
     distributed = pytest.importorskip("distributed")
     text = SLOW  # 6000 points in 100 blocks: long enough to kill a worker partway
@@ -146,6 +148,7 @@ def test_distributed_cluster_with_a_worker_killed_gives_the_same_atlas(tmp_path)
     same(xr.open_dataset(target), reference)
 
 
+@pytest.mark.slow
 def test_unreachable_scheduler_is_a_one_line_error(tmp_path, capsys):
     from sweep.cli import main
 

@@ -448,6 +448,7 @@ def test_the_peak_accelerations_scan_finds_the_roots_of_the_exact_slope():
             best, rel=1e-14), (k, xi, v)
 
 
+@pytest.mark.slow
 def test_the_closed_form_flight_time_is_exact_to_round_off_up_to_the_separatrix():
     """tau1 (P-O3) against mpmath at 40 digits (tanh-sinh on the same integral, its panels
     halving towards the turning point) for the kernel's own amplitude A, at 120 random

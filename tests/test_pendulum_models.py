@@ -162,6 +162,7 @@ def test_rotor_on_its_stop_matches_scipy_at_random_designs():
                                                                                    count)
 
 
+@pytest.mark.slow
 def test_rotor_impacts_to_converge_count_the_sequence_from_rest_not_the_sections_flown():
     """The rotor model's sequence on its stop jumps over most of its transient (the affine
     map's fixed point, then Broyden's steps), so the impacts from rest past the first jump
@@ -509,6 +510,7 @@ def _exact_walk(psi, dpsi, k, kappa, h, n):
     return y
 
 
+@pytest.mark.slow
 def test_the_rigid_pendulums_exact_step_against_scipy_and_mpmath():
     """The closed-form flight's step (Jacobi's addition theorem, models.rigid_exact),
     walked over random spans at random designs and energies: libration, rotation over the
@@ -550,6 +552,7 @@ def test_the_rigid_pendulums_exact_step_against_scipy_and_mpmath():
     assert _exact_walk(0.0, 0.0, 1.0, 1.0, 0.3, 10) == (0.0, 0.0)  # rest stays at rest
 
 
+@pytest.mark.slow
 def test_closed_form_flights_on_the_blade_match_dopri5_at_random_designs():
     """The rigid model on the blade with its flights in closed form (tol 1e-9) against
     DOPRI5 at rtol 1e-12, at 60 random designs (benchmarks/auto_cases.blade_points: every
@@ -853,6 +856,7 @@ def test_rotor_on_the_blade_chatters_like_the_rigid_model_in_the_limit():
     assert status == "ok" and out["regime"] == REG["chatter"]  # accumulates in every cycle
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["paper", "rigid"])
 def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(model):
     """The coast of a driven pendulum's free flight past the lab blade (tools._swing_coast)

@@ -271,6 +271,7 @@ def six_link_peaks_reference(design, out):
     return peak, peak2
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", [None, SPIKE], ids=["random", "audit_spike"])
 def test_six_link_peaks_at_random_designs_and_the_audited_spike(design):
     """The audit: 30 of 240 random designs were off by up to 0.47 % (a maximum between the

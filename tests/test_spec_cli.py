@@ -108,6 +108,7 @@ def test_existing_atlas_is_not_overwritten_without_force(tmp_path, capsys):
     assert e.value.code == 0
 
 
+@pytest.mark.slow
 def test_console_entry_points_run_the_default_sweep(tmp_path):
     """As a user would: python -m sweep run (the built-in default) writes atlas + chart."""
     out = subprocess.run([sys.executable, "-m", "sweep", "run", "-o", "default.nc"],
@@ -135,14 +136,14 @@ def test_examples_list_and_write(tmp_path, capsys):
     assert spec.load(target).mechanism.name == "crank_rocker"
 
 
-@pytest.mark.parametrize("name", sorted(__import__("sweep.cli", fromlist=["EXAMPLES"]).EXAMPLES))
+@pytest.mark.parametrize("name", sorted(__import__("sweep.api", fromlist=["examples"]).examples()))
 def test_every_builtin_example_parses_and_runs_on_a_corner_of_its_grid(tmp_path, name):
     """The examples users start from must not rot: each parses, and two points of its grid
     run through the whole pipeline to an atlas with units on every variable."""
     import xarray as xr
 
     from sweep import runner, spec
-    from sweep.cli import _example_text
+    from sweep.api import example_text as _example_text
 
     s = spec.parse(_example_text(name))
     for axis in s.axes:  # keep the first two values of every axis
@@ -199,7 +200,7 @@ def test_the_sweeps_progress_bar_shows_on_a_new_terminal(monkeypatch, tmp_path):
     import time
 
     from sweep import engine, runner, spec
-    from sweep.cli import _example_text
+    from sweep.api import example_text as _example_text
 
     s = spec.parse(_example_text("crank_rocker"))
     for axis in s.axes:
@@ -216,6 +217,7 @@ def test_the_sweeps_progress_bar_shows_on_a_new_terminal(monkeypatch, tmp_path):
     assert "sweep:" in shown and re.search(r"(\d+)/\1 \[", shown), repr(shown)
 
 
+@pytest.mark.slow
 def test_a_first_runs_compile_is_said_with_its_time_and_a_warm_start_says_nothing(
         monkeypatch, capsys):
     """A compile longer than runner.COMPILE_NOTICE_AFTER is announced, then how long it

@@ -110,6 +110,7 @@ def section_jacobians(model, tool, design, rtol=1e-12, eps=2e-4, transient=600):
             (4.0 * fine - coarse) / 3.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model, tool", SYSTEMS)
 def test_multipliers_equal_central_differences_of_the_map_at_random_designs(model, tool):
     """At random designs with a steady cycle (chatter: the next test): the
@@ -163,6 +164,7 @@ THROUGH_CONTACT = [("rotor", "slide"), ("rotor", "chatter"), ("rigid", "chatter"
                    ("paper", "chatter")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model, case", THROUGH_CONTACT)
 def test_multipliers_through_a_slide_and_an_accumulated_chatter_equal_central_differences(
         model, case):
@@ -205,6 +207,7 @@ def test_multipliers_through_a_slide_and_an_accumulated_chatter_equal_central_di
     assert compared >= min(5, len(chosen) - 1), compared
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["paper", "rigid", "rotor"])
 def test_the_jump_to_a_chatters_accumulation_point_is_differentiated(model):
     """A chatter's last bounces contract its perturbations by R each, so through a whole
@@ -299,6 +302,7 @@ def follow(model, design, rs, transient, steps, rtol=1e-11):
 FLIP = dict(model="paper", tool="lab_window", k=2.71573, xi=3.36865, tool_window=0.70681)
 
 
+@pytest.mark.slow
 def test_a_period_doubling_is_where_the_multiplier_reaches_minus_one():
     """Along R, the period_1 pattern's leading multiplier is real and negative (angle pi)
     and its modulus rises as R falls; where its linear trend reaches 1, the regime from
@@ -335,6 +339,7 @@ def test_a_period_doubling_is_where_the_multiplier_reaches_minus_one():
 BORDER = dict(k=1.83664, xi=5.96195, kappa=1.43255, tool_window=0.36767)
 
 
+@pytest.mark.slow
 def test_a_border_collision_is_where_edge_margin_reaches_zero():
     """Following the once-a-turn cycle down in R, its impact walks out to the blade's edge:
     edge_margin falls linearly to zero and the cycle ends there (the striker slips past
@@ -486,6 +491,7 @@ def test_stability_outputs_cost_nothing_unless_asked_for():
         assert name not in s.method_record.outputs
 
 
+@pytest.mark.slow
 def test_a_chattering_cycle_has_its_slowest_impact_near_zero():
     """impact_speed_min_ratio over random blade designs: where the cycle accumulates a
     chatter, its last bounce is slower than the Zeno guard (SPEED_EPS / R in gap units), so

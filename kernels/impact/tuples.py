@@ -1,13 +1,13 @@
 """Elementwise arithmetic on states held as tuples of floats, for any state size.
 
 A model keeps its own state size (2 for a pendulum at constant rotor speed, 4 with the rotor)
-as a tuple: in numba a tuple lives in registers, and a 4-tuple step ran 1.8x faster than the
-same step on a 4-element array. numba has no elementwise tuple arithmetic, so each function
+as a tuple: in numba a tuple lives in registers, and a 4-tuple step ran markedly faster than
+the same step on a 4-element array. numba has no elementwise tuple arithmetic, so each function
 below is an ``overload`` that writes straight-line code for the tuple's length, with the
 same order of operations as a hand-written component (``y + h * (a1 k1 + a2 k2)``).
 They are left to LLVM to inline, not inlined in numba's IR: on the 20-component state of
-the variational equations IR inlining made type inference the bulk of the compile (the
-rotor model on the blade with multipliers: 91 -> 64 s cold), and the steps run as fast.
+the variational equations IR inlining made type inference the bulk of the compile, and
+the steps run as fast.
 Plain-Python versions of the same functions serve tests and callers outside numba.
 """
 

@@ -154,7 +154,55 @@ def evaluate(ds: xr.Dataset, expr: str) -> xr.DataArray:
     if not (isinstance(mask, xr.DataArray) and mask.dtype == bool):
         raise UserError("where: the expression must be a condition, e.g. \"x > 1\"")
     dims = [d for d in ds["status"].dims]
+    extra = [d for d in mask.dims if d not in dims]
+    if extra:
+        profiles = sorted(name for name in tree_names(tree) if name in ds.data_vars
+                          and extra[0] in ds[name].dims)
+        raise UserError(f"where: {', '.join(profiles) or 'the condition'} is a profile over "
+                        f"{extra[0]}; a condition picks grid points: compare a value with "
+                        f"one value per design, or take the profile at one {extra[0]} "
+                        f"(--at {extra[0]}=VALUE with --columns)")
     return mask.broadcast_like(ds["status"]).transpose(*dims)
+
+
+def at_values(at) -> dict[str, tuple[float, str]]:
+    """Axes taken at one value, as {axis: (number, "" or "deg")}, from {axis: number or
+    "90deg"} (the Python API) or ["axis=90deg", ...] (the command line's --at)."""
+    if at is None:
+        return {}
+    if isinstance(at, dict):
+        pairs = [(str(name), value) for name, value in at.items()]
+    else:
+        pairs = []
+        for pair in at:
+            dim, sep, value = str(pair).partition("=")
+            if not sep:
+                raise UserError(f"at: {pair!r} must be AXIS=NUMBER in the axis's units, or "
+                                "NUMBERdeg for an angle, e.g. crank_angle=90deg")
+            pairs.append((dim.strip(), value.strip()))
+    out = {}
+    for dim, value in pairs:
+        if isinstance(value, bool):
+            number = None
+        elif isinstance(value, (int, float, np.integer, np.floating)):
+            number, unit = float(value), ""
+        else:
+            text = str(value).strip()
+            unit = "deg" if text.endswith(("deg", "°")) else ""
+            try:
+                number = float(text.removesuffix("deg").removesuffix("°"))
+            except ValueError:
+                number = None
+        if number is None or not np.isfinite(number):
+            raise UserError(f"at: {dim}={value!r} must be a number in the axis's units, or "
+                            "NUMBERdeg for an angle, e.g. crank_angle=90deg")
+        out[dim] = (number, unit)
+    return out
+
+
+def tree_names(tree: ast.AST) -> set[str]:
+    """The variable names a parsed expression reads."""
+    return {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)}
 
 
 def grid_variables(ds: xr.Dataset) -> list[str]:

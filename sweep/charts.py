@@ -1,15 +1,17 @@
 """Design charts from an atlas: matplotlib PNG with units on the axes and colour bar.
 
 A numeric output is a colour map with contour lines and the output's marked levels (K = 1);
-a flag output (``regime``, ``status``) is drawn as categories with its meanings in a legend.
+a flag output (``regime``, ``status``) and a count that takes few values (``attractor_count``)
+are drawn as categories with their meanings in a legend.
 Cells without a design value are not left white: they are drawn in greys, one per status,
-named in the legend. Angles are drawn in degrees unless asked otherwise; the atlas stays in
-radians.
+named in the legend. Angles are drawn in degrees unless asked otherwise (a rotor angle of
+many turns, in turns); the atlas stays in radians. Figures are built without pyplot, so
+that a notebook's backend and a thread's charts do not interfere.
 """
 
 from __future__ import annotations
 
-import platform
+import datetime as _dt
 import textwrap
 from pathlib import Path
 from typing import NamedTuple
@@ -18,7 +20,7 @@ import numpy as np
 import xarray as xr
 
 from sweep.errors import UserError
-from sweep.query import evaluate, flag_names, take_at
+from sweep.selection import evaluate, flag_names, take_at
 
 #: panels per row of a chart with one panel per value of another axis
 PANELS_PER_ROW = 3
@@ -29,6 +31,8 @@ UNDETERMINED_COLOUR = "#7f7f7f"  # a flag's negative code: no category was decid
 #: crossings this close (relative) on one edge are drawn as one
 THIN_BAND = 1e-6
 BLANK_GREYS = ("0.86", "0.72", "0.58", "0.93", "0.65", "0.79")
+#: a count with at most this many distinct values is drawn as categories
+MAX_COUNT_CATEGORIES = 12
 
 
 class Drawn(NamedTuple):
@@ -60,8 +64,31 @@ def category_colour(code: int, codes) -> str:
     return CATEGORY_COLOURS[decided.index(code) % len(CATEGORY_COLOURS)]
 
 
+def _declared(ds: xr.Dataset, name: str):
+    """The declaration of an atlas variable's output, or None (a coordinate, status, or an
+    atlas of an unknown mechanism)."""
+    from sweep import registry
+
+    mech = ds.attrs.get("mechanism", "")
+    if mech not in registry.names():
+        return None
+    try:
+        return registry.get(mech).declaration.output(name)
+    except KeyError:
+        return None
+
+
+def _chart_units(ds: xr.Dataset, name: str) -> tuple[str, float] | None:
+    """(units, factor) a chart shows a variable in instead of its own, if declared."""
+    output = _declared(ds, name)
+    return output.chart_units if output is not None else None
+
+
 def _units(ds: xr.Dataset, name: str, degrees: bool) -> str:
     units = ds[name].attrs.get("units", "")
+    other = _chart_units(ds, name)
+    if other is not None:
+        return other[0]
     if degrees and units == "rad":
         return "deg"
     return "-" if units in ("1", "") else units
@@ -72,12 +99,35 @@ def _label(ds: xr.Dataset, name: str, degrees: bool = False) -> str:
     return f"{name} [{_units(ds, name, degrees)}]\n{long_name}"
 
 
-def _shown(var: xr.DataArray, degrees: bool) -> np.ndarray:
-    """A variable's values as drawn: radians in degrees when asked."""
+def _shown(var: xr.DataArray, degrees: bool, ds: xr.Dataset | None = None) -> np.ndarray:
+    """A variable's values as drawn: in its declared chart units (a rotor angle in turns),
+    radians in degrees when asked."""
     values = np.asarray(var.values)
+    other = _chart_units(ds, str(var.name)) if ds is not None else None
+    if other is not None:
+        return values * other[1]
     if degrees and var.attrs.get("units") == "rad":
         return np.degrees(values)
     return values
+
+
+def _is_count(ds: xr.Dataset, name: str) -> bool:
+    """A declared count whose finite values are few enough to read as categories."""
+    output = _declared(ds, name)
+    if output is None or not output.count:
+        return False
+    values = np.asarray(ds[name].values, dtype=float)
+    distinct = np.unique(values[np.isfinite(values)])
+    return 0 < distinct.size <= MAX_COUNT_CATEGORIES and bool(
+        np.all(distinct == np.round(distinct)))
+
+
+def made_by() -> str:
+    """The caption's last line: the code that drew a chart, and when (not the host)."""
+    from sweep.metadata import code_version
+
+    today = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d")
+    return f"impact-sweep {code_version()}, {today}"
 
 
 def _log_spaced(values: np.ndarray) -> bool:
@@ -103,15 +153,8 @@ def _number(value: float) -> str:
 
 def _marks(ds: xr.Dataset, name: str) -> tuple:
     """The declared (value, meaning) levels of an output (from the mechanism's declaration)."""
-    from sweep import registry
-
-    mech = ds.attrs.get("mechanism", "")
-    if mech not in registry.names():
-        return ()
-    try:
-        return registry.get(mech).declaration.output(name).marks
-    except KeyError:
-        return ()
+    output = _declared(ds, name)
+    return output.marks if output is not None else ()
 
 
 def _panel_title(ds: xr.Dataset, dim: str, k: int, degrees: bool) -> str:
@@ -128,20 +171,29 @@ def _panel_title(ds: xr.Dataset, dim: str, k: int, degrees: bool) -> str:
 def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                  ok_only: bool = True, degrees: bool = True, at: dict | None = None,
                  boundaries: xr.Dataset | None = None, overlay: str | None = None) -> Drawn:
+    """``design_figure`` saved as a PNG at ``out``; what it shows, read back (``Drawn``)."""
+    fig = design_figure(ds, x, y, color, ok_only=ok_only, degrees=degrees, at=at,
+                        boundaries=boundaries, overlay=overlay)
+    fig.savefig(out, dpi=110)
+    return drawn(fig, out)
+
+
+def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = True,
+                  degrees: bool = True, at: dict | None = None,
+                  boundaries: xr.Dataset | None = None, overlay: str | None = None):
     """Chart of ``color`` over (x, y), one panel per value of the other grid axis of more than
-    one value (at most three panels a row). ``ok_only``: cells whose status has no design
-    values are drawn as their status, not as a value; ``degrees``: angles in degrees;
-    ``at``: take other grid axes at one value ({axis: (value, "" or "deg")});
-    ``boundaries``: the refined crossings of ``sweep boundaries``, drawn as lines;
+    one value (at most three panels a row), as a matplotlib Figure. ``ok_only``: cells whose
+    status has no design values are drawn as their status, not as a value; ``degrees``:
+    angles in degrees; ``at``: take other grid axes at one value ({axis: (value, "" or
+    "deg")}); ``boundaries``: the refined crossings of ``sweep boundaries``, drawn as lines;
     ``overlay``: a numeric output drawn as labelled contour lines over the colours (the
     stability margin over a regime map), where it has a design value."""
     import matplotlib
     import matplotlib.colors as mcolors
     import matplotlib.ticker as ticker
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     from sweep.metadata import usable_mask
@@ -151,6 +203,16 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
             raise UserError(f"{axis}: unknown variable {name!r}; allowed: "
                             + ", ".join(sorted(map(str, ds.variables))))
     grid_dims = list(ds["status"].dims)
+    if x == y:
+        raise UserError(f"y: {y!r} is also the x axis; pick two different variables")
+    for axis, name in (("x", x), ("y", y)):
+        if name in (at or {}):
+            raise UserError(f"at: {name!r} is the chart's {axis} axis; take another axis at "
+                            "one value")
+        if name not in grid_dims or ds[name].dtype.kind not in "fiu":
+            raise UserError(f"{axis}: {name!r} is not a numeric grid axis; a design chart is "
+                            "drawn over two of them (" + ", ".join(
+                                d for d in grid_dims if ds[d].dtype.kind in "fiu") + ")")
     if any(d not in grid_dims for d in ds[color].dims):
         raise UserError(f"color: {color!r} is a profile; chart it with `sweep profile`, or "
                         "`sweep query --at` for its value at one angle")
@@ -174,23 +236,37 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     panels = [None] if not facet_dims else list(range(ds.sizes[facet_dims[0]]))
     n_cols = min(len(panels), PANELS_PER_ROW)
     n_rows = -(-len(panels) // n_cols)
-    fig, axes = plt.subplots(n_rows, n_cols, figsize=(4.6 * n_cols + 1.8, 4.2 * n_rows + 0.9),
-                             squeeze=False, constrained_layout=True)
+    fig = Figure(figsize=(4.6 * n_cols + 1.8, 4.2 * n_rows + 0.9), layout="constrained")
+    axes = fig.subplots(n_rows, n_cols, squeeze=False)
     var = ds[color]
     status = ds["status"]
     status_names = flag_names(status)
     is_flag = "flag_meanings" in var.attrs
-    if is_flag:
-        names = flag_names(var)
-        present = sorted(int(c) for c in np.unique(var.values) if int(c) in names)
+    is_count = not is_flag and _is_count(ds, color)
+    usable = usable_mask(ds).values if ok_only else np.ones(var.shape, bool)
+    if is_flag or is_count:
+        if is_flag:
+            names = flag_names(var)
+            has_value = np.ones(var.shape, bool)
+            present = sorted(int(c) for c in np.unique(var.values) if int(c) in names)
+            colour_of = {c: category_colour(c, names) for c in present}
+        else:  # a count: each value its own category, in the order of the values
+            values = np.asarray(var.values, dtype=float)
+            has_value = usable & np.isfinite(values)
+            present = sorted(int(v) for v in np.unique(values[has_value]))
+            names = {c: f"{c:d}" for c in present}
+            colour_of = {c: CATEGORY_COLOURS[i % len(CATEGORY_COLOURS)]
+                         for i, c in enumerate(present)}
         index = {code: i for i, code in enumerate(present)}
-        cmap = mcolors.ListedColormap([category_colour(c, names) for c in present])
-        norm = mcolors.BoundaryNorm(np.arange(len(present) + 1) - 0.5, len(present))
-        shown = np.vectorize(lambda c: index.get(int(c), np.nan), otypes=[float])(var.values)
-        has_value = np.ones(var.shape, bool)
+        cmap = mcolors.ListedColormap([colour_of[c] for c in present] or ["1.0"])
+        norm = mcolors.BoundaryNorm(np.arange(max(len(present), 1) + 1) - 0.5,
+                                    max(len(present), 1))
+        codes = np.where(has_value, np.asarray(var.values, dtype=float), np.nan)
+        shown = np.full(codes.shape, np.nan)
+        for code, i in index.items():
+            shown[codes == code] = i
     else:
-        shown = _shown(var, degrees).astype(float)
-        usable = usable_mask(ds).values if ok_only else np.ones(var.shape, bool)
+        shown = _shown(var, degrees, ds).astype(float)
         has_value = usable & np.isfinite(shown)
         shown = np.where(has_value, shown, np.nan)
         finite = shown[has_value]
@@ -208,6 +284,7 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
         levels = levels[~np.isin(levels, [value for value, _ in marks])]  # drawn as marks
         labelled = (levels[np.isclose(np.log10(levels), np.round(np.log10(levels)))]
                     if log_colour else levels[::2])
+    categorical = is_flag or is_count
     shown = xr.DataArray(shown, dims=var.dims)
     # cells without a value, drawn as their status (greys), each named in the legend
     blank_codes = np.where(has_value, -1, status.transpose(*var.dims).values
@@ -220,11 +297,11 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     grey_map = mcolors.ListedColormap([grey_of[c] for c in blank_present] or ["1.0"])
     grey_norm = mcolors.BoundaryNorm(np.arange(max(len(blank_present), 1) + 1) - 0.5,
                                      max(len(blank_present), 1))
-    if is_flag:
+    if categorical:
         marks = ()
-    x_values, y_values = _shown(ds[x], degrees), _shown(ds[y], degrees)
+    x_values, y_values = _shown(ds[x], degrees, ds), _shown(ds[y], degrees, ds)
     if overlay is not None:
-        lay = _shown(ds[overlay], degrees).astype(float)
+        lay = _shown(ds[overlay], degrees, ds).astype(float)
         lay = xr.DataArray(np.where(usable_mask(ds).values if ok_only else True, lay, np.nan),
                            dims=ds[overlay].dims)
         finite = lay.values[np.isfinite(lay.values)]
@@ -237,44 +314,39 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
         blank = blank_index.isel(pick) if pick else blank_index
         others = [d for d in val.dims if d not in (x, y)]
         val, blank = val.squeeze(others, drop=True), blank.squeeze(others, drop=True)
-        if x in val.dims and y in val.dims:
-            grid = val.transpose(y, x).values
-            ax.pcolormesh(x_values, y_values, blank.transpose(y, x).values, cmap=grey_map,
-                          norm=grey_norm, shading="nearest")
-            mesh = ax.pcolormesh(x_values, y_values, grid, norm=norm, cmap=cmap,
-                                 shading="nearest")
-            if boundaries is not None:
-                panel = {d: ds[d].values[pick.get(d, 0)] for d in grid_dims
-                         if d not in (x, y) and (d in pick or ds.sizes[d] == 1)}
-                segments = boundary_segments(boundaries, grid_dims, grid_shape, x, y, panel)
-                fx, fy = (np.degrees(1.0) if degrees and ds[n].attrs.get("units") == "rad"
-                          else 1.0 for n in (x, y))
-                segments = [[(a * fx, b * fy) for a, b in seg] for seg in segments]
-                ax.add_collection(LineCollection(segments, colors="black", linewidths=1.3))
-            if overlay is not None:
-                lay_panel = lay.isel(pick) if pick else lay
-                lay_panel = lay_panel.squeeze([d for d in lay_panel.dims if d not in (x, y)],
-                                              drop=True).transpose(y, x).values
-                lay_panel = _without_jumps(lay_panel)
-                if np.isfinite(lay_panel).sum() > 4 and len(overlay_levels):
-                    lines = ax.contour(x_values, y_values, lay_panel, levels=overlay_levels,
-                                       colors="black", linewidths=0.9, linestyles="-")
-                    ax.clabel(lines, fontsize=7, fmt=_number, inline_spacing=2)
-            if not is_flag and np.isfinite(grid).sum() > 4:
-                if len(levels):
-                    lines = ax.contour(x_values, y_values, grid, levels=levels, norm=norm,
-                                       colors="white", linewidths=0.6)
-                    # decades (log) or every other level labelled: labels do not pile up
-                    ax.clabel(lines, labelled, fontsize=7, fmt=_number, inline_spacing=2)
-                for value, meaning in marks:
-                    if np.nanmin(grid) < value < np.nanmax(grid):
-                        mark = ax.contour(x_values, y_values, grid, levels=[value],
-                                          colors="#d62728", linewidths=1.6, linestyles="--")
-                        ax.clabel(mark, fmt={value: meaning.split(":")[0]}, fontsize=8)
-        else:
-            xs = _shown(ds[x].broadcast_like(ds[color].isel(pick)), degrees).ravel()
-            ys = _shown(ds[y].broadcast_like(ds[color].isel(pick)), degrees).ravel()
-            mesh = ax.scatter(xs, ys, c=val.values.ravel(), norm=norm, s=8, cmap=cmap)
+        grid = val.transpose(y, x).values
+        ax.pcolormesh(x_values, y_values, blank.transpose(y, x).values, cmap=grey_map,
+                      norm=grey_norm, shading="nearest")
+        mesh = ax.pcolormesh(x_values, y_values, grid, norm=norm, cmap=cmap,
+                             shading="nearest")
+        if boundaries is not None:
+            panel = {d: ds[d].values[pick.get(d, 0)] for d in grid_dims
+                     if d not in (x, y) and (d in pick or ds.sizes[d] == 1)}
+            segments = boundary_segments(boundaries, grid_dims, grid_shape, x, y, panel)
+            fx, fy = (float(_shown(xr.DataArray(1.0, name=n, attrs=ds[n].attrs),
+                                   degrees, ds)) for n in (x, y))
+            segments = [[(a * fx, b * fy) for a, b in seg] for seg in segments]
+            ax.add_collection(LineCollection(segments, colors="black", linewidths=1.3))
+        if overlay is not None:
+            lay_panel = lay.isel(pick) if pick else lay
+            lay_panel = lay_panel.squeeze([d for d in lay_panel.dims if d not in (x, y)],
+                                          drop=True).transpose(y, x).values
+            lay_panel = _without_jumps(lay_panel)
+            if np.isfinite(lay_panel).sum() > 4 and len(overlay_levels):
+                lines = ax.contour(x_values, y_values, lay_panel, levels=overlay_levels,
+                                   colors="black", linewidths=0.9, linestyles="-")
+                ax.clabel(lines, fontsize=7, fmt=_number, inline_spacing=2)
+        if not categorical and np.isfinite(grid).sum() > 4:
+            if len(levels):
+                lines = ax.contour(x_values, y_values, grid, levels=levels, norm=norm,
+                                   colors="white", linewidths=0.6)
+                # decades (log) or every other level labelled: labels do not pile up
+                ax.clabel(lines, labelled, fontsize=7, fmt=_number, inline_spacing=2)
+            for value, meaning in marks:
+                if np.nanmin(grid) < value < np.nanmax(grid):
+                    mark = ax.contour(x_values, y_values, grid, levels=[value],
+                                      colors="#d62728", linewidths=1.6, linestyles="--")
+                    ax.clabel(mark, fmt={value: meaning.split(":")[0]}, fontsize=8)
         ax.set_xlabel(_label(ds, x, degrees))
         ax.set_ylabel(_label(ds, y, degrees))
         if k is not None:
@@ -288,14 +360,14 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
         ax.set_visible(False)
     handles = []
     if overlay is not None:
-        handles.append(plt.Line2D([], [], color="black", lw=0.9,
-                                  label=f"{_label(ds, overlay, degrees)} (contour lines)"))
+        handles.append(Line2D([], [], color="black", lw=0.9,
+                              label=f"{_label(ds, overlay, degrees)} (contour lines)"))
     if boundaries is not None:
-        handles.append(plt.Line2D([], [], color="black", lw=1.3, label=(
+        handles.append(Line2D([], [], color="black", lw=1.3, label=(
             f"boundaries of {boundaries.attrs.get('variable')}, refined to "
             f"{float(boundaries.attrs.get('tolerance', np.nan)):g}")))
-    if is_flag:
-        handles += [Patch(color=category_colour(c, names), label=names[c]) for c in present]
+    if categorical:
+        handles += [Patch(color=colour_of[c], label=names[c]) for c in present]
     else:
         bar = fig.colorbar(mesh, ax=axes.ravel().tolist(), shrink=0.9)
         bar.set_label(_label(ds, color, degrees))
@@ -304,35 +376,49 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
         for value, meaning in marks:
             if norm.vmin < value < norm.vmax:
                 bar.ax.axhline(value, color="#d62728", lw=1.6, ls="--")
-                handles.append(plt.Line2D([], [], color="#d62728", lw=1.6, ls="--",
-                                          label=meaning))
+                handles.append(Line2D([], [], color="#d62728", lw=1.6, ls="--",
+                                      label=meaning))
     counts = {c: int((blank_codes == c).sum()) for c in blank_present}
     handles += [Patch(color=grey_of[c], label=f"no {color} value: {status_names.get(c, c)} "
                                              f"({counts[c]:,} points)")
                 for c in blank_present]
     if handles:
+        # as many columns as the figure's width holds of the longest label (8 pt text)
+        longest = max(len(h.get_label()) for h in handles)
+        fits = int(fig.get_figwidth() / (0.075 * longest + 0.6))
         fig.legend(handles=handles, loc="outside lower center", fontsize=8,
-                   ncols=min(len(handles), 3), title=(f"{color}: {var.attrs.get('long_name')}"
-                                                      if is_flag else None),
+                   ncols=max(1, min(len(handles), 3, fits)),
+                   title=(f"{color}: {var.attrs.get('long_name')}"
+                                                      if categorical else None),
                    title_fontsize=8)
     caption = ds.attrs.get("title", "")
     if chosen:
         caption += f"\nat {chosen}"
-    caption += f"\nmade on {platform.node() or 'unknown host'} ({platform.machine()})"
+    caption += f"\n{made_by()}"
     fig.suptitle(caption, fontsize=8)
-    fig.savefig(out, dpi=110)
-    used = [ax for ax in axes.ravel() if ax.get_visible()]
-    fig.canvas.draw()
-    drawn = Drawn(out, [h.get_label() for h in handles], [ax.get_title() for ax in used],
-                  n_rows, n_cols, used[0].get_xlabel(), used[0].get_ylabel(),
-                  used[0].get_xscale(), used[0].get_yscale(),
-                  [t.get_text() for t in used[0].get_xticklabels() if t.get_text()],
-                  [t.get_text() for t in used[0].get_yticklabels() if t.get_text()],
-                  not is_flag,
-                  [mcolors.to_hex(h.get_facecolor() if isinstance(h, Patch) else h.get_color())
-                   for h in handles])
-    plt.close(fig)
-    return drawn
+    fig.layout_shape = (n_rows, n_cols)  # read back by ``drawn``
+    fig.colour_bar = not categorical
+    return fig
+
+
+def drawn(fig, out: Path) -> Drawn:
+    """What a design figure shows, read back from it (for the CLI and the tests)."""
+    import matplotlib.colors as mcolors
+    from matplotlib.patches import Patch
+
+    fig.draw_without_rendering()
+    used = [ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]
+    handles = fig.legends[0].legend_handles if fig.legends else []
+    n_rows, n_cols = fig.layout_shape
+    labels = [t.get_text() for t in fig.legends[0].get_texts()] if fig.legends else []
+    return Drawn(out, labels, [ax.get_title() for ax in used],
+                 n_rows, n_cols, used[0].get_xlabel(), used[0].get_ylabel(),
+                 used[0].get_xscale(), used[0].get_yscale(),
+                 [t.get_text() for t in used[0].get_xticklabels() if t.get_text()],
+                 [t.get_text() for t in used[0].get_yticklabels() if t.get_text()],
+                 fig.colour_bar,
+                 [mcolors.to_hex(h.get_facecolor() if isinstance(h, Patch) else h.get_color())
+                  for h in handles])
 
 
 def check_boundaries(ds: xr.Dataset, bounds: xr.Dataset) -> None:
@@ -440,15 +526,22 @@ def _angle_ticks(ax, degrees: bool) -> None:
 
 def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path,
                   degrees: bool = True) -> tuple:
+    """``profile_figure`` saved as a PNG at ``out``; (out, the grid point's description)."""
+    fig, where_text = profile_figure(ds, names, where, degrees)
+    fig.savefig(out, dpi=110)
+    return out, where_text
+
+
+def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
+                   degrees: bool = True) -> tuple:
     """Profiles of ``names`` over the profile dimension at the first grid point matching
-    ``where``; where a profile spikes (1/dphi1 reactions) a symmetric-log y axis shows the
-    spike and the rest of the cycle. Angle axes get ticks every 90° (or pi/2); the crank
-    angles of special positions and impacts the atlas records are marked."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    ``where``, as (Figure, the grid point in words). One panel per unit, stacked over a
+    shared angle axis (N and N m on one axis would flatten the smaller); where a profile
+    spikes (1/dphi1 reactions) a symmetric-log y axis shows the spike and the rest of the
+    cycle. Angles on both axes in degrees, or both in radians; the angle axis ticks every
+    90° (or pi/2); the crank angles of special positions and impacts the atlas records are
+    marked."""
+    from matplotlib.figure import Figure
 
     if not names:
         raise UserError("vars: give at least one profile variable")
@@ -466,42 +559,44 @@ def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path
         raise UserError("where: no grid point matches")
     at = {d: int(i) for d, i in zip(grid_dims, hits[0])}
     point = ds.isel(at)
-    fig, ax = plt.subplots(figsize=(8, 4.8), constrained_layout=True)
+    by_unit: dict[str, list[str]] = {}
+    for name in names:
+        by_unit.setdefault(_units(point, name, degrees), []).append(name)
+    fig = Figure(figsize=(8, 2.2 + 2.6 * len(by_unit)), layout="constrained")
+    axes = fig.subplots(len(by_unit), 1, sharex=True, squeeze=False)[:, 0]
     angle = point[pdim].attrs.get("units") == "rad"
     x = _shown(point[pdim], degrees)
-    scale = []
-    for name in names:
-        y = point[name].values
-        ax.plot(x, y, lw=1.0, label=f"{name}: {point[name].attrs.get('long_name', '')}")
-        scale.append(np.nanmedian(np.abs(y)))
-    units = {point[n].attrs.get("units", "") for n in names}
-    top = max(float(np.nanmax(np.abs(point[n].values))) for n in names)
-    typical = max(1e-300, float(np.nanmax(scale)))
-    if top > 100 * typical:  # a spike (1/dphi1 reactions): a log scale shows it and the rest
-        ax.set_yscale("symlog", linthresh=typical)
-        ax.set_ylabel(f"[{', '.join(sorted(units))}] (symmetric log)")
-    else:
-        ax.set_ylabel(f"[{', '.join(sorted(units))}]")
-    ax.set_xlabel(_label(ds, pdim, degrees))
-    if angle:
-        _angle_ticks(ax, degrees)
-        for value, kind in _angle_marks(point):
-            if np.isfinite(value):
-                shown = np.degrees(value) if degrees else value
-                period = 360.0 if degrees else 2 * np.pi
-                while shown > x.max() + 1e-9:  # marks of a 4 pi cycle on a 2 pi profile
-                    shown -= period
-                ax.axvline(shown, color="0.3", lw=0.8, ls=":")
-                ax.annotate(kind, (shown, 1.0), xycoords=("data", "axes fraction"),
-                            fontsize=7, rotation=90, va="top", ha="right")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    for ax, (units, group) in zip(axes, by_unit.items()):
+        scale = []
+        for name in group:
+            y = _shown(point[name], degrees, ds)
+            ax.plot(x, y, lw=1.0, label=f"{name}: {point[name].attrs.get('long_name', '')}")
+            scale.append(np.nanmedian(np.abs(y)))
+        top = max(float(np.nanmax(np.abs(_shown(point[n], degrees, ds)))) for n in group)
+        typical = max(1e-300, float(np.nanmax(scale)))
+        if top > 100 * typical:  # a spike (1/dphi1 reactions): a log scale shows it and the rest
+            ax.set_yscale("symlog", linthresh=typical)
+            ax.set_ylabel(f"[{units}] (symmetric log)")
+        else:
+            ax.set_ylabel(f"[{units}]")
+        if angle:
+            _angle_ticks(ax, degrees)
+            for value, kind in _angle_marks(point):
+                if np.isfinite(value):
+                    shown = np.degrees(value) if degrees else value
+                    period = 360.0 if degrees else 2 * np.pi
+                    while shown > x.max() + 1e-9:  # marks of a 4 pi cycle on a 2 pi profile
+                        shown -= period
+                    ax.axvline(shown, color="0.3", lw=0.8, ls=":")
+                    ax.annotate(kind, (shown, 1.0), xycoords=("data", "axes fraction"),
+                                fontsize=7, rotation=90, va="top", ha="right")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[-1].set_xlabel(_label(ds, pdim, degrees))
     where_text = ", ".join(_point_text(point, d, degrees) for d in grid_dims)
-    ax.set_title(f"{ds.attrs.get('title', '')}\nat {where_text}; made on "
-                 f"{platform.node() or 'unknown host'} ({platform.machine()})", fontsize=8)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out, where_text
+    axes[0].set_title(f"{ds.attrs.get('title', '')}\nat {where_text}; {made_by()}",
+                      fontsize=8)
+    return fig, where_text
 
 
 def _angle_marks(point: xr.Dataset) -> list[tuple[str, str]]:

@@ -24,6 +24,7 @@ of chatter), or values that exist on one side only.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import json
 import math
 import os
@@ -37,7 +38,7 @@ from sweep import engine
 from sweep.errors import UserError
 from sweep.metadata import (CONVENTIONS, code_version, flag_codes, history_line,
                             package_versions)
-from sweep.query import flag_names
+from sweep.selection import flag_names
 from sweep.store import atomic, check_target, open_partial, partial_dir
 
 #: a relative change of the outputs across the final bracket above this is a jump
@@ -78,7 +79,18 @@ class Request:
         if ds.attrs.get("mechanism") not in registry.names() or "spec" not in ds.attrs:
             raise UserError("atlas: no recorded spec of a known mechanism to run again")
         try:
-            self.sweep = spec.validate(json.loads(ds.attrs["spec"]))
+            document = json.loads(ds.attrs["spec"])
+        except ValueError:
+            raise UserError("atlas: its recorded spec is not readable JSON") from None
+        # the recorded grid against the atlas's own, from the axis specifications alone:
+        # a spec changed after the run must not make a grid of another size
+        shape = spec.grid_shape(document)
+        if shape != tuple(ds[var].shape[:len(shape or ())]) or shape is None:
+            raise UserError(f"atlas: its recorded spec's grid {shape} is not the grid of its "
+                            f"variables {tuple(ds['status'].shape)}: the file was changed "
+                            "after the run")
+        try:
+            self.sweep = spec.validate(document)
         except (UserError, ValueError) as err:
             raise UserError(f"atlas: its recorded spec does not validate here ({err})") \
                 from None
@@ -258,21 +270,34 @@ def refine(ds, var: str = "status", tol: float = 1e-8, target: Path | None = Non
            force: bool = False, progress: bool = False, history: str | None = None):
     """Refine every boundary of ``var`` in the atlas ``ds``; write the crossings to
     ``target`` (atomically) when given. Returns the crossings as an xarray Dataset."""
-    from sweep.runner import compile_first, terminal_bar_size
+    from sweep import resources
 
     request = Request(ds, var, tol)
+    if target is not None:
+        check_target(target, force or resume)
+    lock = resources.target_lock(target) if target is not None else contextlib.nullcontext()
+    with lock:
+        return _refine(request, var, target, workers, chunk, resume, force, progress, history)
+
+
+def _refine(request, var, target, workers, chunk, resume, force, progress, history):
+    """``refine`` once its target is locked: the rounds of bisection, each kept for a
+    resume, then the crossings."""
+    from sweep import resources
+    from sweep.runner import compile_first, terminal_bar_size
+
     if chunk is not None:
         request.sweep = request.sweep.with_run(chunk=chunk)
     workers = workers or request.sweep.run.workers or os.cpu_count() or 1
     state = None
     if target is not None:
-        check_target(target, force or resume)
+        resources.remove_stale_temporaries(target)
         state = _State(request, target, resume, force)
     saved = state.load() if state is not None else None
     edges, rounds, evaluations = saved if saved else (grid_edges(request), 0, 0)
     if progress:
         print(f"refining {edges['point'].size:,} grid edges where {var} changes "
-              f"(to {tol:g}) ...", file=sys.stderr, flush=True)
+              f"(to {request.tol:g}) ...", file=sys.stderr, flush=True)
     if (~edges["done"]).any():
         compile_first(request.sweep, announce=progress)
     from tqdm import tqdm
@@ -290,6 +315,12 @@ def refine(ds, var: str = "status", tol: float = 1e-8, target: Path | None = Non
             bar.update(1)
             if state is not None:
                 state.save(edges, rounds, evaluations)
+    except KeyboardInterrupt:
+        if state is None:
+            raise
+        raise resources.RunInterrupted(
+            f"interrupted; {rounds} finished rounds are kept in {state.folder}; "
+            f"`sweep boundaries ATLAS --var {var} -o {target} --resume` continues") from None
     finally:
         bar.close()
     result = crossings(request, edges, workers)

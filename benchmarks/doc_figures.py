@@ -1,0 +1,64 @@
+"""The example charts of the documentation, made again from the built-in examples.
+
+Run:  .venv/bin/python benchmarks/doc_figures.py [FOLDER]
+
+FOLDER holds the examples' atlases and charts as ``reference_atlases.py write FOLDER`` (or
+``sweep run`` of each example) leaves them; without it they are run here, in a temporary
+folder. Each example's chart (what ``sweep run`` draws from its [chart]) is copied into
+docs/ under the name the pages use, and the two profile charts are drawn with the same
+function as ``sweep profile``. The work-precision and failure charts are made by
+``benchmarks/charts.py``.
+"""
+
+from __future__ import annotations
+
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+import sweep  # noqa: E402
+
+DOCS = HERE.parent / "docs"
+#: example -> the name of its chart in docs/
+CHARTS = {"crank_rocker": "crank_rocker_atlas.png",
+          "rotary_pendulum": "rotary_pendulum_atlas.png",
+          "rotary_pendulum_blade": "blade_regime.png",
+          "rotary_pendulum_stability": "rotary_pendulum_stability.png",
+          "spring_balancer": "spring_balancer_atlas.png"}
+#: (example, profile variables, the grid point, the chart's name in docs/)
+PROFILES = [("linkage_forces", ["F21_n", "F34_n", "F32_n", "F14_n", "balancing_moment"],
+             "omega1 == 30 and abs(tilt - 0.5235987755982988) < 1e-9",
+             "linkage_forces_profile.png"),
+            ("six_link", ["rocker_angle"], "abs(beta - 0.628318) < 1e-6 and abs(mu5 - 2.5) < 1e-9",
+             "six_link_rocker_profile.png")]
+
+
+def atlas_of(example: str, folder: Path) -> Path:
+    """The example's atlas in ``folder``, run there if it is not."""
+    path = folder / f"{example}.nc"
+    if not path.exists():
+        sweep.run(sweep.example(example), path, progress=True).close()
+    return path
+
+
+def main(folder: Path) -> None:
+    for example, name in CHARTS.items():
+        atlas_of(example, folder)
+        shutil.copyfile(folder / f"{example}.png", DOCS / name)
+        print(f"docs/{name}: the chart of `sweep run` of {example}")
+    for example, names, where, name in PROFILES:
+        with sweep.open_atlas(atlas_of(example, folder)) as atlas:
+            sweep.profile(atlas, names, where, path=DOCS / name, force=True)
+        print(f"docs/{name}: `sweep profile` of {example} at {where}")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1:
+        main(Path(sys.argv[1]))
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            main(Path(tmp))
