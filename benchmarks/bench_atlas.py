@@ -5,8 +5,9 @@ netCDF write, summary; the imports are paid before, by the warm-up).
 
 Run: .venv/bin/python benchmarks/bench_atlas.py [SPEC ...]
      (default: the 10^6-point rotor-model sweep and the 10^4-point blade sweep in
-     benchmarks/specs/; rotary_pendulum_blade_1e5.toml is the 10^5-point one; the
-     results of the specs run replace theirs in benchmarks/results/atlas.json)
+     benchmarks/specs/; rotary_pendulum_blade_1e5.toml is the 10^5-point one,
+     impact_machine_1e4.toml the machine's; the results of the specs run replace theirs
+     in benchmarks/results/atlas.json)
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ def timed_run(spec: Path, out: Path) -> dict:
     run_block, compute = engine.run_block, runner._compute_local
     engine.run_block = timed(run_block, "block_s")
     runner._compute_local = timed(compute, "compute_s")
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), time.process_time()
     try:
         cli.main(["run", str(spec), "-o", str(out), "--force", "-q"])
     except SystemExit as done:  # the CLI ends a run with its exit code
@@ -51,10 +52,15 @@ def timed_run(spec: Path, out: Path) -> dict:
             raise
     finally:
         engine.run_block, runner._compute_local = run_block, compute
-    wall = time.perf_counter() - started
-    return {"wall_s": round(wall, 2), "compute_s": round(spans["compute_s"], 2),
-            "block_s": round(spans["block_s"], 2),
-            "outside_kernels": round(1.0 - spans["compute_s"] / wall, 3)}
+    wall, cpu = time.perf_counter() - started, time.process_time() - cpu
+    import netCDF4
+
+    with netCDF4.Dataset(out) as nc:
+        points = int(nc["status"].size)
+    return {"points": points, "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
+            "compute_s": round(spans["compute_s"], 2), "block_s": round(spans["block_s"], 2),
+            "outside_kernels": round(1.0 - spans["compute_s"] / wall, 3),
+            "points_per_cpu_s": round(points / cpu, 1)}
 
 
 def main() -> None:

@@ -28,7 +28,8 @@ CHARTS = {"crank_rocker": "crank_rocker_atlas.png",
           "rotary_pendulum": "rotary_pendulum_atlas.png",
           "rotary_pendulum_blade": "blade_regime.png",
           "rotary_pendulum_stability": "rotary_pendulum_stability.png",
-          "spring_balancer": "spring_balancer_atlas.png"}
+          "spring_balancer": "spring_balancer_atlas.png",
+          "impact_machine": "impact_machine_atlas.png"}
 #: (example, profile variables, the grid point, the chart's name in docs/)
 PROFILES = [("linkage_forces", ["F21_n", "F34_n", "F32_n", "F14_n", "balancing_moment"],
              "omega1 == 30 and abs(tilt - 0.5235987755982988) < 1e-9",

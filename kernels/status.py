@@ -26,6 +26,11 @@ CODES = {
     "no_special_position": 16,  # a general four-bar that is not a change-point linkage
     "not_periodic": 17,  # the impact sequence did not settle into a cycle (quasi-periodic)
     "separatrix": 18,  # the steady impact speed is the escape threshold: no period exists
+    "stalls": 19,  # the crank stops (the motor cannot carry the machine through a turn)
+    "reverses": 20,  # the blow throws the crank backwards: no one-blow-per-turn regime
+    "singular_inertia": 21,  # the reduced inertia vanishes on the cycle (no crank inertia)
+    "too_slow": 22,  # a revolution takes too long to be a working machine
+    "no_convergence": 23,  # no periodic steady state within the revolutions allowed
 }
 #: the meaning of each code
 MEANINGS = {code: name for name, code in CODES.items()}

@@ -22,6 +22,7 @@ MECHANISMS = {
     "six_link": "kernels.six_link",
     "spring_balancer": "kernels.balancer",
     "rotary_pendulum": "kernels.rotary_pendulum",
+    "impact_machine": "kernels.machine",
 }
 
 

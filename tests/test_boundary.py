@@ -221,7 +221,8 @@ def test_every_kernel_function_compiles_once(tmp_path):
 
     examples = KERNELS.parent / "sweep" / "example_specs"
     paths = [str(examples / f"{name}.toml") for name in (
-        "crank_rocker", "linkage_forces", "six_link", "spring_balancer", "rotary_pendulum")]
+        "crank_rocker", "linkage_forces", "six_link", "spring_balancer", "rotary_pendulum",
+        "impact_machine")]
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     out = subprocess.run([sys.executable, "-m", "tests.compile_once", *paths],
                          capture_output=True, text=True, check=True, cwd=KERNELS.parent,

@@ -158,10 +158,18 @@ NEEDS = {
        for name in ("rotor_inertia_ratio", "motor_slope", "idle_speed")},
     **{("linkage_forces", name): dict(base_motion="rotating")
        for name in ("base_omega", "base_epsilon", "crank_pivot_x", "crank_pivot_y")},
+    ("impact_machine", "base_root"): dict(type="b", largest_link=14.0),
+    **{("impact_machine", name): dict(type="general", lambda0=2.029159519725557,
+                                      lambda2=2.5, lambda3=1.470840480274443)
+       for name in ("lambda0", "lambda2", "lambda3")},
 }
 VALUES = {("crank_rocker", "lambda0"): [2.0, 2.5], ("crank_rocker", "lambda2"): [3.0, 2.5],
           ("crank_rocker", "lambda3"): [2.0, 1.5], ("crank_rocker", "largest_link"): [3.0, 4.0],
-          ("rotary_pendulum", "kappa"): [1.2, 1.5]}
+          ("rotary_pendulum", "kappa"): [1.2, 1.5],
+          ("impact_machine", "lambda0"): [2.029159519725557, 2.2],
+          ("impact_machine", "design_restitution"): [0.3, 0.35],
+          ("impact_machine", "lambda2"): [2.5, 2.6], ("impact_machine", "lambda3"):
+          [1.470840480274443, 1.4]}
 
 
 def _two_values(mechanism, p):
