@@ -23,6 +23,10 @@ from kernels.fourbar import closure_vectors, crank_turns_fully, vector_kinematic
 
 NEUTRAL_HALF_SWING, NEUTRAL_MEAN = 0, 1
 
+#: the outputs in SI, from the driven inertia and the crank speed (on request)
+SI_OUTPUTS = ("spring_stiffness", "shaft_stiffness", "moment_peak_free",
+              "moment_peak_balanced")
+
 DECLARATION = Mechanism(
     name="spring_balancer",
     title="Leaf-spring balancer on a four-bar: steady state by Fourier series",
@@ -48,6 +52,10 @@ DECLARATION = Mechanism(
                  default=1.0, **POSITIVE),
         Quantity("eta", "1", "dimensionless damping eta = nu/omega0", "η", default=0.02,
                  minimum=0.0, maximum=10.0),
+        Quantity("driven_inertia", "kg m2", "moment of inertia of the driven mass on the "
+                 "rocker's shaft (I_m), for the outputs in SI", "I_m", **POSITIVE),
+        Quantity("crank_speed", "rad s-1", "crank speed omega (the operating speed: omega0 = "
+                 "omega/f), for the outputs in SI", "ω", **POSITIVE),
         Quantity("spring_neutral", "1", "neutral angle of the spring: half the swing (the "
                  "paper) or the rocker's mean angle (no static moment)",
                  default="half_swing",
@@ -73,7 +81,19 @@ DECLARATION = Mechanism(
         Output("truncation_error", "1", "estimated relative truncation error of the "
                "acceleration metrics", diagnostic=True),
         Output("resonance_margin", "1", "distance to the nearest resonance, min |D_n|/K"),
+        Output("spring_stiffness", "N m rad-1", "the balancer spring's torsional stiffness "
+               "c_sp = I_m omega0^2, omega0 = omega/f", "c_sp", on_request=True),
+        Output("shaft_stiffness", "N m rad-1", "the driven shaft's torsional stiffness "
+               "c = I_m p^2 = c_sp / r^2", "c", on_request=True),
+        Output("moment_peak_free", "N m", "peak unbalanced moment without the balancer, "
+               "c times its invariant", "M_max", on_request=True),
+        Output("moment_peak_balanced", "N m", "peak unbalanced moment with the balancer, "
+               "c times its invariant", "M_zr,max", on_request=True),
     ),
+    rules=lambda given: (
+        "driven_inertia: the outputs in SI need driven_inertia and crank_speed"
+        if given.get("outputs", set()) & set(SI_OUTPUTS)
+        and not {"driven_inertia", "crank_speed"} <= set(given) else None),
     status=("ok", "not_assemblable", "resonance", "truncation", "nonfinite"),
     usable=("truncation",),
     method=(
@@ -92,6 +112,8 @@ DECLARATION = Mechanism(
 )
 P = DECLARATION.parameter_index
 O = DECLARATION.output_index
+#: the outputs this kernel computes: the ones in SI after them come from run()
+KERNEL_ROWS = DECLARATION.output_index.spring_stiffness
 S = DECLARATION.status_codes
 #: the rows of a geometry in the parameter matrix (the Fourier coefficients depend on these)
 GEOMETRY_ROWS = [P.lambda0, P.lambda2, P.lambda3, P.sigma]
@@ -388,7 +410,7 @@ def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
     out[O.dynamic_coefficient_balanced] = _refine_peak(vals[MASS_ACCELERATION_BALANCED], dr, di,
                                                        0.0, m, int(2)) / eps_rigid
     out[O.acceleration_invariant_rigid] = eps_rigid
-    for k in range(out.shape[0]):
+    for k in range(KERNEL_ROWS):
         if not math.isfinite(out[k]):
             return S.nonfinite
     if trunc > tol:
@@ -443,6 +465,17 @@ def run(params, method):
     status = np.empty(n, dtype=np.int8)
     balancer_block(np.ascontiguousarray(params), index.ravel().astype(np.int64), coef_a,
                    coef_b, lengths, gamma0s, tol, res_tol, forced, ok, out, status)
+    # in SI, only where asked for: omega0 = omega/f, c_sp = I_m omega0^2, c = c_sp / r^2,
+    # a moment = c times its invariant (docs/models.md §6.3)
+    si = bool(set(method.outputs) & set(SI_OUTPUTS))
+    spring = (params[P.driven_inertia] * (params[P.crank_speed] / params[P.f]) ** 2
+              if si else np.full(n, np.nan))
+    shaft = spring / params[P.r] ** 2
+    usable = np.isfinite(out[O.moment_invariant_peak_free])
+    out[O.spring_stiffness] = np.where(usable, spring, np.nan)
+    out[O.shaft_stiffness] = np.where(usable, shaft, np.nan)
+    out[O.moment_peak_free] = shaft * out[O.moment_invariant_peak_free]
+    out[O.moment_peak_balanced] = shaft * out[O.moment_invariant_peak_balanced]
     return out, status, np.empty((0, n, 0))
 
 

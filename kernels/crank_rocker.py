@@ -41,7 +41,10 @@ _GEOMETRY = {
 
 
 def _rules(given: dict) -> str | None:
-    """Each swept type must get exactly one of its ways of giving the geometry."""
+    """Each swept type must get exactly one of its ways of giving the geometry; the energy
+    per blow needs the rocker's inertia."""
+    if "blow_energy" in given.get("outputs", ()) and "rocker_inertia" not in given:
+        return "rocker_inertia: required for the output blow_energy (the rocker's J about D)"
     types = given.get("type") or {"a"}
     links = {name for name in _LINKS if name in given}
     for t in sorted(types):
@@ -98,6 +101,9 @@ DECLARATION = Mechanism(
         Quantity("omega1", "rad s-1", "crank angular velocity (omega1); its sign is the "
                  "rotation direction", symbol="ω1", default=30.0, nonzero=True),
         assembly_branch(),
+        Quantity("rocker_inertia", "kg m2", "moment of inertia of the rocker and striker "
+                 "about the rocker pivot D (J_D3), for the energy per blow", "J_D3",
+                 **POSITIVE),
     ),
     outputs=(
         Output("lambda0", "1", "base ratio l0/l1 (lambda0)", "λ0", echoes="lambda0"),
@@ -128,6 +134,11 @@ DECLARATION = Mechanism(
                flags=BRANCH_FLAGS, undetermined="undetermined"),
         Output("special_crank_angle", "rad", "crank angle of the impact special position "
                "(phi1*)", "φ1*"),
+        Output("blow_energy", "J", "energy per blow: the rocker's kinetic energy at impact, "
+               "J_D3 (u31 omega1)^2 / 2, at the prescribed crank speed (the machine's own "
+               "speed and its loss: impact_machine)", "E_striker", on_request=True),
+        Output("blow_rate", "min-1", "blows per minute at the prescribed crank speed (one a "
+               "crank turn)", on_request=True),
         Output("special_position_count", "1", "number of special positions per crank "
                "turn", diagnostic=True, count=True),
         Output("restitution_kinematic_max", "1", "largest |Rk| reachable with this rocker "
@@ -383,9 +394,16 @@ def crank_rocker_block(params, geometry_tol, out, status):
 
 
 def run(params, method):
-    """Entry point: (outputs, status, profiles); this mechanism has no profiles."""
+    """Entry point: (outputs, status, profiles); this mechanism has no profiles. The energy
+    per blow and the blow rate only where asked for."""
     n = params.shape[1]
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
     crank_rocker_block(params, method.geometry_tol, out, status)
+    w = params[P.omega1]
+    out[O.blow_energy] = (0.5 * params[P.rocker_inertia] * (out[O.transfer_before] * w) ** 2
+                          if "blow_energy" in method.outputs else np.nan)
+    out[O.blow_rate] = (np.where(np.isfinite(out[O.transfer_before]),
+                                 60.0 * np.abs(w) / (2.0 * np.pi), np.nan)
+                        if "blow_rate" in method.outputs else np.nan)
     return out, status, np.empty((0, n, 0))

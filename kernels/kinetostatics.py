@@ -33,7 +33,10 @@ from kernels.fourbar import (
     vector_kinematics,
 )
 
-BASE_FIXED, BASE_ROTATING = 0, 1
+BASE_FIXED, BASE_ROTATING, BASE_HARMONIC = 0, 1, 2
+#: a harmonic base motion repeats after q crank turns where its frequency ratio is p/q;
+#: the cycle of the outputs is those q turns, q at most this
+MAX_BASE_TURNS = 12
 
 # defaults: the kinetostatic test mechanism ([CR] Table 1, lambda2 = 2.5, R = 0.3,
 # crank 0.1 m, tilt 25 degrees, 30 rad/s), so that the example runs as it is
@@ -41,7 +44,23 @@ _L1 = 0.1
 _L0, _L2, _L3 = 2.029159519725557 * _L1, 2.5 * _L1, 1.470840480274443 * _L1
 _NONNEG = dict(minimum=0.0)
 _ROTATING = {"base_motion": ("rotating",)}
+_HARMONIC = {"base_motion": ("harmonic",)}
+_MOVING = {"base_motion": ("rotating", "harmonic")}
 _WINDOWED = "outside |phi1 - phi1*| < special_window at a special position"
+
+def _rules(given: dict) -> str | None:
+    """A harmonic base motion must repeat after a few crank turns: nu = p/q, q <= 12."""
+    from fractions import Fraction
+
+    for nu in given.get("base_frequency_ratio", ()):
+        if "harmonic" not in given.get("base_motion", ()):
+            break
+        q = Fraction(nu).limit_denominator(MAX_BASE_TURNS)
+        if abs(float(q) - nu) > 1e-9 * max(1.0, nu):
+            return (f"base_frequency_ratio: {nu!r} does not repeat within {MAX_BASE_TURNS} "
+                    "crank turns; give p/q with q <= 12 (e.g. 0.5, 1, 2/3 as 0.6666666666666666)")
+    return None
+
 
 DECLARATION = Mechanism(
     name="linkage_forces",
@@ -92,17 +111,29 @@ DECLARATION = Mechanism(
                  "external force acts", default=0.0),
         Quantity("external_moment", "N m", "external couple on the rocker "
                  "(counter-clockwise)", default=0.0),
-        Quantity("base_motion", "1", "fixed base, or the additional rocker's base turning "
-                 "with the main rocker (GUIM-1)", default="fixed",
-                 choices={"fixed": BASE_FIXED, "rotating": BASE_ROTATING}),
+        Quantity("base_motion", "1", "fixed base; the additional rocker's base turning "
+                 "with the main rocker (GUIM-1) as a frozen snapshot (rotating: Omega_b and "
+                 "E_b held over the cycle); or as a motion (harmonic: the main rocker swings "
+                 "base_amplitude sin(base_frequency_ratio phi1 + base_phase), gravity "
+                 "turning with it)", default="fixed",
+                 choices={"fixed": BASE_FIXED, "rotating": BASE_ROTATING,
+                          "harmonic": BASE_HARMONIC}),
         Quantity("base_omega", "rad s-1", "main rocker angular velocity (Omega_b), held "
                  "over the cycle", "Ω_b", default=0.0, used_when=_ROTATING),
         Quantity("base_epsilon", "rad s-2", "main rocker angular acceleration (E_b), held "
                  "over the cycle", "E_b", default=0.0, used_when=_ROTATING),
+        Quantity("base_amplitude", "rad", "amplitude of the main rocker's swing about the "
+                 "tilt (A_b)", "A_b", default=0.0, minimum=0.0, maximum=math.pi,
+                 used_when=_HARMONIC),
+        Quantity("base_frequency_ratio", "1", "the main rocker's frequency over the crank's "
+                 "(nu = p/q with q <= 12: the motion repeats after q crank turns)", "ν",
+                 default=1.0, minimum=0.0, min_inclusive=False, used_when=_HARMONIC),
+        Quantity("base_phase", "rad", "phase of the main rocker's swing at phi1 = 0",
+                 "φ_b", default=0.0, used_when=_HARMONIC),
         Quantity("crank_pivot_x", "m", "crank pivot A relative to the main rocker pivot O, "
-                 "along the base", default=0.0, used_when=_ROTATING),
+                 "along the base", default=0.0, used_when=_MOVING),
         Quantity("crank_pivot_y", "m", "crank pivot A relative to the main rocker pivot O, "
-                 "across the base", default=0.0, used_when=_ROTATING),
+                 "across the base", default=0.0, used_when=_MOVING),
     ),
     outputs=(
         Output("force_peak_A", "N", "peak |F14| at the crank pivot A over a cycle",
@@ -150,6 +181,7 @@ DECLARATION = Mechanism(
     status=("ok", "not_assemblable", "special_position", "nonfinite", "degenerate",
             "second_special_position", "no_special_position"),
     usable=("special_position", "second_special_position"),
+    rules=_rules,
     method=(
         geometry_tol("the special-position window"),
         Quantity("special_window", "rad", "half-width of the window around a special "
@@ -195,12 +227,49 @@ def _cross(ax, ay, bx, by):
 @njit(**KERNEL_OPTIONS)
 def joint_forces(phi1, pr, sigma, res, snap=0.0):
     """Joint reactions and balancing moment at crank angle phi1 (see _joint_forces)."""
-    tilt, g = pr[P.tilt], pr[P.g]
-    return _joint_forces(phi1, pr, sigma, res, snap, -g * math.sin(tilt), -g * math.cos(tilt))
+    gx, gy, wb, eb = base_state(phi1, pr)
+    return _joint_forces(phi1, pr, sigma, res, snap, gx, gy, wb, eb)
 
 
 @njit(**KERNEL_OPTIONS)
-def _joint_forces(phi1, pr, sigma, res, snap, gx, gy):
+def base_state(phi1, pr):
+    """The base at crank angle phi1: gravity in the base frame and its angular velocity and
+    acceleration, (gx, gy, Omega_b, E_b). Fixed: -g (sin tilt, cos tilt), 0, 0; rotating
+    (the frozen snapshot): the given Omega_b and E_b; harmonic (the motion): the main rocker
+    at theta_b = A sin(nu phi1 + phase) with phi1 = omega1 t, so Omega_b = A nu omega1
+    cos(.), E_b = A nu (epsilon1 cos(.) - nu omega1^2 sin(.)), and gravity turned by
+    theta_b."""
+    tilt, g = pr[P.tilt], pr[P.g]
+    mode = pr[P.base_motion]
+    if mode == BASE_HARMONIC:
+        a, nu = pr[P.base_amplitude], pr[P.base_frequency_ratio]
+        w1, e1 = pr[P.omega1], pr[P.epsilon1]
+        arg = nu * phi1 + pr[P.base_phase]
+        sa, ca = math.sin(arg), math.cos(arg)
+        theta = tilt + a * sa
+        return (-g * math.sin(theta), -g * math.cos(theta), a * nu * w1 * ca,
+                a * nu * (e1 * ca - nu * w1 * w1 * sa))
+    if mode == BASE_ROTATING:
+        return (-g * math.sin(tilt), -g * math.cos(tilt), pr[P.base_omega],
+                pr[P.base_epsilon])
+    return -g * math.sin(tilt), -g * math.cos(tilt), 0.0, 0.0
+
+
+@njit(**KERNEL_OPTIONS)
+def base_turns(pr):
+    """The crank turns after which the outputs' cycle closes: 1 for a fixed or frozen base;
+    for the harmonic base the smallest q <= MAX_BASE_TURNS with nu q whole (0: none)."""
+    if pr[P.base_motion] != BASE_HARMONIC:
+        return 1
+    nu = pr[P.base_frequency_ratio]
+    for q in range(1, MAX_BASE_TURNS + 1):
+        if abs(nu * q - round(nu * q)) <= 1e-9 * q * max(1.0, nu):
+            return q
+    return 0
+
+
+@njit(**KERNEL_OPTIONS)
+def _joint_forces(phi1, pr, sigma, res, snap, gx, gy, wb, eb):
     """Joint reactions and balancing moment at crank angle phi1 (docs/models.md §4.2).
 
     pr holds one point's parameters (rows P of the declaration); res (length N_RESULT) gets the
@@ -208,7 +277,9 @@ def _joint_forces(phi1, pr, sigma, res, snap, gx, gy):
     work and from the reactions, and the normal/tangential components relative to the coupler
     (F21), rocker (F34, F32) and crank (F14). Returns False where the loop cannot close.
     snap: see kernels.fourbar.dyad_factors (the point kernel passes geometry_tol).
-    (gx, gy): gravity in the base frame, -g (sin tilt, cos tilt), computed once per point.
+    (gx, gy, wb, eb): gravity in the base frame and the base's angular velocity and
+    acceleration at this crank angle (base_state), computed once per point where they do
+    not change over the cycle.
     """
     l0, l1, l2, l3 = pr[P.l0], pr[P.l1], pr[P.l2], pr[P.l3]
     m1, m2, m3 = pr[P.m1], pr[P.m2], pr[P.m3]
@@ -218,9 +289,7 @@ def _joint_forces(phi1, pr, sigma, res, snap, gx, gy):
     w1, e1 = pr[P.omega1], pr[P.epsilon1]
     f_t, f_n = pr[P.external_force], pr[P.external_force_normal]
     arm, m_ext = pr[P.external_force_arm], pr[P.external_moment]
-    rotating = pr[P.base_motion] == BASE_ROTATING
-    wb = pr[P.base_omega] if rotating else 0.0
-    eb = pr[P.base_epsilon] if rotating else 0.0
+    rotating = pr[P.base_motion] != BASE_FIXED
     oax = pr[P.crank_pivot_x] if rotating else 0.0
     oay = pr[P.crank_pivot_y] if rotating else 0.0
 
@@ -326,11 +395,22 @@ def _peak_quantity(q, res):
 
 
 @njit(**KERNEL_OPTIONS)
+def _forces_at(phi, pr, sigma, res, tol, base):
+    """_joint_forces at crank angle phi with the base state ``base`` (gx, gy, Omega_b, E_b)
+    computed once for the point, or anew at each angle where the base moves (harmonic)."""
+    if pr[P.base_motion] == BASE_HARMONIC:
+        gx, gy, wb, eb = base_state(phi, pr)
+    else:
+        gx, gy, wb, eb = base
+    return _joint_forces(phi, pr, sigma, res, tol, gx, gy, wb, eb)
+
+
+@njit(**KERNEL_OPTIONS)
 def _peak_at(phi, data):
     """Quantity q at crank angle phi (NaN where the loop cannot close); data as packed by
     _point."""
-    q, pr, sigma, res, tol, gx, gy = data
-    if not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
+    q, pr, sigma, res, tol, base = data
+    if not _forces_at(phi, pr, sigma, res, tol, base):
         return math.nan
     return _peak_quantity(q, res)
 
@@ -386,41 +466,48 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     start = math.pi if kind == CHANGE_POINT_C else 0.0  # cycle (phi1*, phi1* + 2 pi)
     if kind != 0:
         out[O.special_crank_angle] = start
-    gx, gy = -pr[P.g] * math.sin(pr[P.tilt]), -pr[P.g] * math.cos(pr[P.tilt])  # base frame
+    base = base_state(0.0, pr)  # gravity and the base's motion, unless the base swings
+    turns = base_turns(pr)  # the outputs' cycle: the crank turns after which all repeats
+    if turns == 0:
+        return S.nonfinite
 
     # cycle work and RMS of M_b: Gauss-Legendre on each open piece between special
-    # positions (M_b jumps at a node: one-sided there, never integrated across)
+    # positions (M_b jumps at a node: one-sided there, never integrated across), over the
+    # turns of the cycle; the work per crank turn
     pieces = 2 if count > 1 else 1
     half = math.pi / pieces
     work = 0.0
     square = 0.0
-    for piece in range(pieces):
-        base = start + 2.0 * half * piece
-        for k in range(gl_x.shape[0]):
-            if not _joint_forces(base + half * (gl_x[k] + 1.0), pr, sigma, res, tol, gx, gy):
-                return S.not_assemblable
-            work += half * gl_w[k] * res[R_MB]
-            square += half * gl_w[k] * res[R_MB] * res[R_MB]
-    out[O.balancing_moment_rms] = math.sqrt(square / (2.0 * math.pi))
-    out[O.cycle_work] = direction * work  # energy delivered by the drive per cycle
+    for turn in range(turns):
+        for piece in range(pieces):
+            left = start + 2.0 * math.pi * turn + 2.0 * half * piece
+            for k in range(gl_x.shape[0]):
+                if not _forces_at(left + half * (gl_x[k] + 1.0), pr, sigma, res, tol, base):
+                    return S.not_assemblable
+                work += half * gl_w[k] * res[R_MB]
+                square += half * gl_w[k] * res[R_MB] * res[R_MB]
+    out[O.balancing_moment_rms] = math.sqrt(square / (2.0 * math.pi * turns))
+    out[O.cycle_work] = direction * work / turns  # energy delivered by the drive per turn
 
     # peaks outside |phi1 - node| < window (H11: F^n ~ 1/dphi1), piece by piece: the
     # window's edges, a sample clustered towards them, and golden section on the exact
     # kinetostatics around every sampled local maximum (kernels/extrema.py)
     lows, highs = cycle_pieces(kind, count, window)
     best = np.full(N_PEAKS, -math.inf)
-    for piece in range(lows.shape[0]):
-        xs = clustered_points(lows[piece], highs[piece], max(3, n_peak // lows.shape[0]),
-                              int(CLUSTER))
-        values = np.empty((N_PEAKS, xs.shape[0]))
-        for j in range(xs.shape[0]):
-            if not _joint_forces(xs[j], pr, sigma, res, tol, gx, gy):
-                return S.not_assemblable
+    for turn in range(turns):
+        for piece in range(lows.shape[0]):
+            shift = 2.0 * math.pi * turn
+            xs = clustered_points(lows[piece] + shift, highs[piece] + shift,
+                                  max(3, n_peak // lows.shape[0]), int(CLUSTER))
+            values = np.empty((N_PEAKS, xs.shape[0]))
+            for j in range(xs.shape[0]):
+                if not _forces_at(xs[j], pr, sigma, res, tol, base):
+                    return S.not_assemblable
+                for q in range(N_PEAKS):
+                    values[q, j] = _peak_quantity(q, res)
             for q in range(N_PEAKS):
-                values[q, j] = _peak_quantity(q, res)
-        for q in range(N_PEAKS):
-            best[q] = max(best[q], _refine_peak((q, pr, sigma, res, tol, gx, gy), xs,
-                                                values[q], PEAK_LOCATION))
+                best[q] = max(best[q], _refine_peak((q, pr, sigma, res, tol, base), xs,
+                                                    values[q], PEAK_LOCATION))
     for q in range(N_PEAKS):
         out[PEAK_ROWS[q]] = best[q]
 
@@ -434,7 +521,7 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
                     at_node = True
             if count > 1 and abs(phi - start - math.pi) < 1e-12:
                 at_node = True
-        if at_node or not _joint_forces(phi, pr, sigma, res, tol, gx, gy):
+        if at_node or not _forces_at(phi, pr, sigma, res, tol, base):
             continue
         prof[F.F21_n, j], prof[F.F21_t, j] = res[R_F21N], res[R_F21T]
         prof[F.F34_n, j], prof[F.F34_t, j] = res[R_F34N], res[R_F34T]

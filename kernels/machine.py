@@ -1069,7 +1069,8 @@ def _reactions(y, m, lf, res):
     # the load point's offset across the rocker: the force there is the force on the axis
     # plus the couple offset n3 x F
     lf[LP.external_moment] = m[M_MOMENT] + m[M_OFFSET] * (-s3 * fy - c3 * fx)
-    return _ks._joint_forces(y[0], lf, m[M_SIGMA], res, m[M_SNAP], m[M_GX], m[M_GY])
+    return _ks._joint_forces(y[0], lf, m[M_SIGMA], res, m[M_SNAP], m[M_GX], m[M_GY], 0.0,
+                             0.0)
 
 
 @njit(**INNER_OPTIONS)

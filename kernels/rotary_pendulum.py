@@ -40,7 +40,9 @@ _ROTOR = {"model": ("rotor",)}
 
 def _rules(given: dict) -> str | None:
     """The closed form exists for the constant-speed models on the rotor stop and for the
-    rigid model's flights on the blade."""
+    rigid model's flights on the blade; the energy per blow needs the striker's mass."""
+    if "blow_energy" in given.get("outputs", ()) and "striker_mass" not in given:
+        return "striker_mass: required for the output blow_energy"
     models = given.get("model", {"paper"})
     tools = given.get("tool", {"rotor_stop"})
     if "closed_form" in given.get("method.integrator", ()) and (
@@ -100,6 +102,8 @@ DECLARATION = Mechanism(
                  **POSITIVE),
         Quantity("l2", "m", "pendulum length to the striker (l2)", "l2", default=0.04,
                  **POSITIVE),
+        Quantity("striker_mass", "kg", "the striker's mass reduced to its contact point, for "
+                 "the energy per blow", "m_s", **POSITIVE),
         Quantity("tool", "1", "impact condition: a stop on the rotor at psi = 0 "
                  "(rotor_stop, the paper's), or a blade fixed in the frame hit by the "
                  "striker when it reaches it with |psi| <= tool_window (lab_window)",
@@ -189,6 +193,10 @@ DECLARATION = Mechanism(
                "cycle repeating to 1e-9); inf where the two solves reach "
                "different regimes; NaN with a fixed integrator or without a cycle",
                diagnostic=True),
+        Output("blow_energy", "J", "energy per blow: striker_mass times the steady impact "
+               "speed squared, over 2", "E_blow", on_request=True),
+        Output("blow_rate", "min-1", "blows per minute in steady state: 60 times the mean "
+               "rotor speed over the rotor angle between impacts", on_request=True),
     ),
     status=("ok", "escape", "no_impact", "not_periodic", "separatrix", "max_steps",
             "step_underflow", "degenerate", "nonfinite"),
@@ -582,12 +590,17 @@ def run(params, method):
     out[O.edge_margin] = d[ROW.edge]
     out[O.attractor_count] = d[ROW.attractors]
     out[O.basin_fraction] = d[ROW.basin]
+    # the machine's view, only where asked for: the blow's energy and how often it comes
+    out[O.blow_energy] = (0.5 * p["striker_mass"] * out[O.impact_speed] ** 2
+                          if "blow_energy" in asked else np.nan)
+    out[O.blow_rate] = (60.0 * out[O.rotor_speed_ratio] * np.abs(w) / out[O.impact_interval]
+                        if "blow_rate" in asked else np.nan)
     # values of a steady cycle exist only where there is one: an integrated run launched on
     # the separatrix comes back with finite numbers of a cycle whose period is infinite
     cycle_values = [O.amplitude, O.frequency_ratio, O.period, O.impact_speed, O.impact_interval,
                     O.acceleration_peak, O.rotor_speed_ratio, O.error_estimate,
                     O.multiplier_modulus, O.multiplier_angle, O.stability_margin,
-                    O.impact_speed_min_ratio, O.edge_margin]
+                    O.impact_speed_min_ratio, O.edge_margin, O.blow_energy, O.blow_rate]
     out[np.ix_(cycle_values, ~cycle)] = np.nan
     # a steady cycle whose values did not come out finite is not a design value
     values = out[[O.amplitude, O.impact_speed, O.impact_interval, O.acceleration_peak]]

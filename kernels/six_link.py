@@ -55,6 +55,8 @@ DECLARATION = Mechanism(
         Quantity("omega1", "rad s-1", "crank angular speed (|omega1|)", "ω1", default=30.0,
                  **POSITIVE),
         Quantity("crank_length", "m", "crank length (l1)", "l1", default=0.1, **POSITIVE),
+        Quantity("rocker_inertia", "kg m2", "moment of inertia of the stage-2 rocker and "
+                 "striker about its pivot (J5), for the energy per blow", "J5", **POSITIVE),
     ),
     outputs=(
         Output("gamma1", "1", "stage 1 node parameter sqrt(lambda6 lambda2/lambda3) "
@@ -82,7 +84,18 @@ DECLARATION = Mechanism(
         Output("assembly_branch_stage2", "1", "stage 2 assembly branch (sigma2), the impact "
                "branch for the rotation direction", "σ2", flags=BRANCH_FLAGS,
                undetermined="undetermined"),
+        Output("blow_energy_1", "J", "energy of the first blow of the 4 pi cycle: the stage-2 "
+               "rocker's kinetic energy at it, J5 (u51 omega1)^2 / 2", on_request=True),
+        Output("blow_energy_2", "J", "energy of the second blow of the 4 pi cycle",
+               on_request=True),
+        Output("blow_rate", "min-1", "blows per minute (two per 4 pi cycle: one a crank "
+               "turn)", on_request=True),
     ),
+    rules=lambda given: (
+        "rocker_inertia: required for the outputs blow_energy_1 and blow_energy_2 (the "
+        "stage-2 rocker's J about its pivot)"
+        if given.get("outputs", set()) & {"blow_energy_1", "blow_energy_2"}
+        and "rocker_inertia" not in given else None),
     profiles=(Output("rocker_angle", "rad", "stage 2 rocker angle (phi5), from the "
                      "direction D->E, in [0, 2 pi)", "φ5"),),
     profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1) over the 4 pi cycle",
@@ -99,6 +112,8 @@ DECLARATION = Mechanism(
     ),
 )
 O = DECLARATION.output_index
+#: the outputs this kernel computes: the energies per blow after them come from run()
+KERNEL_ROWS = DECLARATION.output_index.blow_energy_1
 P = DECLARATION.parameter_index
 S = DECLARATION.status_codes
 ROCKER_ANGLE = DECLARATION.profile_index.rocker_angle
@@ -276,7 +291,7 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
             phi3 + offset, mu6, 1.0, mu4, mu5, sigma2, tol)
         prof[j] = math.atan2(s3, c3) % TWO_PI  # the rocker swings about phi5* = pi
 
-    for k in range(out.shape[0]):
+    for k in range(KERNEL_ROWS):
         if not math.isfinite(out[k]):
             return S.nonfinite
     return S.ok
@@ -312,4 +327,12 @@ def run(params, method):
     prof = np.empty((len(DECLARATION.profiles), n, angles.shape[0]))
     six_link_block(np.ascontiguousarray(params), method.geometry_tol, method.samples,
                    angles, out, status, prof)
+    w, j5 = params[P.omega1], params[P.rocker_inertia]
+    for energy, transfer in ((O.blow_energy_1, O.transfer_impact_1),
+                             (O.blow_energy_2, O.transfer_impact_2)):
+        out[energy] = (0.5 * j5 * (out[transfer] * w) ** 2
+                       if DECLARATION.outputs[energy].name in method.outputs else np.nan)
+    out[O.blow_rate] = (np.where(np.isfinite(out[O.transfer_impact_1]),
+                                 60.0 * np.abs(w) / (2.0 * np.pi), np.nan)
+                        if "blow_rate" in method.outputs else np.nan)
     return out, status, prof

@@ -469,3 +469,16 @@ def test_the_claim_of_CR_on_the_test_machine():
                        "grid": {"R": np.round(np.arange(0.05, 0.751, 0.01), 2).tolist()},
                        "fixed": {"design_restitution": 0.3, "flywheel_inertia": 0.5}})
     assert np.all(np.diff(light["speed_fluctuation"].values) < 0)
+
+
+@pytest.mark.parametrize("document, field", [
+    ({"grid": {"flywheel_inertia": [-1.0, 5.0]}}, "grid.flywheel_inertia"),
+    ({"grid": {"R": [0.3]}, "fixed": {"impact_law": "kinematic"},
+      "outputs": ["flywheel_for_delta"]}, "outputs"),
+    ({"grid": {"R": [0.3]}, "fixed": {"type": "general", "lambda0": 2.0}}, "lambda2"),
+    ({"grid": {"R": [0.3]}, "fixed": {"stall_torque": 0.0}}, "fixed.stall_torque"),
+])
+def test_bad_machine_input_is_one_line_before_compute(document, field):
+    with pytest.raises(sweep.UserError) as err:
+        sweep.Sweep.from_dict({"mechanism": "impact_machine", **document})
+    assert str(err.value).startswith(field)
