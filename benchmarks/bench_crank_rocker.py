@@ -91,11 +91,18 @@ def numpy_crank_rocker(p, tol):
 
     mu0 = np.where(ia | ib, 0.0, mu(0.0))  # a change point's dead centre: mu = 0 exactly
     mupi = np.where(ic, 0.0, mu(np.pi))
-    out[cr.O.transmission_angle_min] = np.where(turns, np.minimum(mu0, mupi), np.nan)
+    window = np.pi / 6  # the working stroke leaves out 30 degrees either side of the node
+    mu_edge = mu(np.where(c, np.pi, 0.0) + window)
+    out[cr.O.envelope] = np.where(nrs, np.nan, np.maximum.reduce([np.ones(n), lam0, lam2, lam3])
+                                  * p[cr.P.crank_length])
+    out[cr.O.crank_length] = p[cr.P.crank_length]
+    out[cr.O.omega1] = p[cr.P.omega1]
     out[cr.O.gamma] = np.where(nrs, np.nan, np.sqrt(lam0 * lam2 / lam3))
     phi_star = np.where(c, np.pi, 0.0)
     out[cr.O.special_crank_angle] = np.where(nrs, np.nan, phi_star)
     out[cr.O.transmission_angle_opposite] = np.where(turns, np.where(c, mu0, mupi), np.nan)
+    out[cr.O.transmission_angle_working] = np.where(
+        turns, np.minimum(mu_edge, out[cr.O.transmission_angle_opposite]), np.nan)
     kappa = np.where(b, -1.0, 1.0)
     den = np.where(c, 1 + lam0, 1 - lam0)
     sigma = -kappa

@@ -42,9 +42,13 @@ _GEOMETRY = {
 
 def _rules(given: dict) -> str | None:
     """Each swept type must get exactly one of its ways of giving the geometry; the energy
-    per blow needs the rocker's inertia."""
+    per blow needs the rocker's inertia; a size and a speed are each given one way."""
     if "blow_energy" in given.get("outputs", ()) and "rocker_inertia" not in given:
         return "rocker_inertia: required for the output blow_energy (the rocker's J about D)"
+    for derived, given_as in (("crank_length", "envelope"), ("omega1", "impact_speed_limit")):
+        if derived in given and given_as in given:
+            return (f"{given_as}: given instead of {derived}, the other is derived from it; "
+                    "give one of them")
     types = given.get("type") or {"a"}
     links = {name for name in _LINKS if name in given}
     for t in sorted(types):
@@ -96,10 +100,18 @@ DECLARATION = Mechanism(
                  "quadratic is the base", default="smaller",
                  choices={"smaller": ROOT_SMALLER_BASE, "larger": ROOT_LARGER_BASE},
                  used_when={"type": ("b",)}),
-        Quantity("crank_length", "m", "crank length (l1)", symbol="l1", default=0.1,
-                 **POSITIVE),
+        Quantity("crank_length", "m", "crank length (l1); or give envelope", symbol="l1",
+                 default=0.1, **POSITIVE),
+        Quantity("envelope", "m", "overall size: the length of the largest link (the "
+                 "linkage's size is mostly its largest link, [CR]); given instead of "
+                 "crank_length, the crank length is derived from it",
+                 replaces="crank_length", **POSITIVE),
         Quantity("omega1", "rad s-1", "crank angular velocity (omega1); its sign is the "
-                 "rotation direction", symbol="ω1", default=30.0, nonzero=True),
+                 "rotation direction; or give impact_speed_limit", symbol="ω1", default=30.0,
+                 nonzero=True),
+        Quantity("impact_speed_limit", "m s-1", "the rocker tip's speed limit at impact "
+                 "([CR]: 10 m/s); given instead of omega1, the crank turns as fast as keeps "
+                 "the blow at it (positive rotation)", replaces="omega1", **POSITIVE),
         assembly_branch(),
         Quantity("rocker_inertia", "kg m2", "moment of inertia of the rocker and striker "
                  "about the rocker pivot D (J_D3), for the energy per blow", "J_D3",
@@ -123,9 +135,12 @@ DECLARATION = Mechanism(
                "(|u31| |omega1| lambda3 l1)"),
         Output("crank_turns_fully", "1", "whether the crank can turn fully",
                flags={"undetermined": -1, "no": 0, "yes": 1}, undetermined="undetermined"),
-        Output("transmission_angle_min", "rad", "minimum transmission angle over a crank "
-               "turn", "μmin", "0 for any change-point four-bar: all links are collinear at "
-               "the special position"),
+        Output("transmission_angle_working", "rad", "smallest transmission angle over the "
+               "working stroke: the crank turn outside method.working_window around the "
+               "special position, the dead centre opposite it included", "μ_work",
+               "at the special position itself every change-point four-bar is collinear "
+               "(mu = 0); the window leaves out the impact's neighbourhood, where the rocker "
+               "is stopped by the tool anyway"),
         Output("transmission_angle_opposite", "rad", "transmission angle at the dead "
                "centre opposite the special position", "μ", "the design-relevant "
                "transmission angle of an impact four-bar (its minimum is 0 at the impact by "
@@ -134,10 +149,16 @@ DECLARATION = Mechanism(
                flags=BRANCH_FLAGS, undetermined="undetermined"),
         Output("special_crank_angle", "rad", "crank angle of the impact special position "
                "(phi1*)", "φ1*"),
+        Output("envelope", "m", "overall size: the length of the largest link", "L_max",
+               echoes="envelope"),
+        Output("crank_length", "m", "crank length (l1), given or derived from envelope",
+               "l1", echoes="crank_length"),
+        Output("omega1", "rad s-1", "crank angular velocity, given or derived from "
+               "impact_speed_limit", "ω1", echoes="omega1"),
         Output("blow_energy", "J", "energy per blow: the rocker's kinetic energy at impact, "
-               "J_D3 (u31 omega1)^2 / 2, at the prescribed crank speed (the machine's own "
-               "speed and its loss: impact_machine)", "E_striker", on_request=True),
-        Output("blow_rate", "min-1", "blows per minute at the prescribed crank speed (one a "
+               "J_D3 (u31 omega1)^2 / 2, at the crank speed omega1 (given, or derived from "
+               "impact_speed_limit; the machine's own speed and its loss: impact_machine)", "E_striker", on_request=True),
+        Output("blow_rate", "min-1", "blows per minute at the crank speed omega1 (one a "
                "crank turn)", on_request=True),
         Output("special_position_count", "1", "number of special positions per crank "
                "turn", diagnostic=True, count=True),
@@ -146,7 +167,12 @@ DECLARATION = Mechanism(
     ),
     status=("ok", "not_assemblable", "no_real_synthesis", "wrong_branch", "nonfinite",
             "degenerate", "no_impact", "second_special_position", "no_special_position"),
-    method=(geometry_tol("the full-turn test"),),
+    method=(
+        geometry_tol("the full-turn test"),
+        Quantity("working_window", "rad", "half-width of the window around the special "
+                 "position left out of the working stroke's transmission angle (default "
+                 "30 degrees)", "δ_w", default=math.pi / 6.0, minimum=0.0, maximum=1.5),
+    ),
     rules=_rules,
     boundaries=(
         *(Boundary(frozenset(sides), "types a and c: the largest link reaches gamma = "
@@ -269,18 +295,28 @@ def _given(first, second):
 
 
 @njit(**KERNEL_OPTIONS)
-def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code, tol):
+def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code, tol,
+           envelope, speed_limit, window):
     """Evaluate one grid point. Returns (status, lambda0, lambda2, lambda3, gamma, Rk,
-    u31 before, u31 after, |u31 before|, impact speed, crank turns fully (0/1), mu_min,
-    mu opposite, sigma, phi1*, special positions, |Rk| max): the outputs of one point.
+    u31 before, u31 after, |u31 before|, impact speed, crank turns fully (0/1), mu on the
+    working stroke, mu opposite, sigma, phi1*, special positions, |Rk| max, envelope, l1,
+    omega1): the outputs of one point.
 
     Works on local scalars and returns everything at once, so the block loop writes each
     output exactly once; NaN stands for a value that does not exist at this point. ``big``
     is largest_link; the type's own name for its largest link may stand in for it.
+    ``envelope`` (not NaN): the largest link's length, from which l1 follows;
+    ``speed_limit`` (not NaN): the impact speed from which omega1 > 0 follows; ``window``:
+    the half-width around the node left out of the working transmission angle.
     """
     nan = math.nan
     lam0 = lam2 = lam3 = gamma = rk = before = after = ratio = speed = nan
     turns_out = mu_min = mu_opp = branch = phi_star = count_out = rk_max = nan
+    size = nan
+    if not math.isnan(envelope):
+        l1 = nan  # derived from the envelope below, where the linkage exists
+    if not math.isnan(speed_limit):
+        w = 1.0  # the direction; the speed itself follows from the limit below
     direction = 1.0 if w > 0.0 else -1.0
     status = S.ok
     for _ in range(1):  # a single pass; "break" ends it early with the status set
@@ -346,6 +382,13 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
             if kind != CHANGE_POINT_C and abs(lam0 - 1.0) <= tol * (1.0 + lam0 + lam2 + lam3):
                 status = S.degenerate
                 break
+        largest = max(1.0, lam0, lam2, lam3)
+        if not math.isnan(envelope):  # the size given: the crank length follows
+            l1 = envelope / largest
+        size = largest * l1
+        if turns and kind != 0:  # the working stroke: outside the window around the node
+            mu_min = working_transmission_angle(lam0, lam2, lam3, phi_star, window, mu_opp,
+                                                tol)
         if not turns:
             status = S.not_assemblable
             break
@@ -361,6 +404,8 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
         # gamma = 1: one branch value is 0 and the rocker stops at the node: no Rk exists
         rk = after / before if before != 0.0 else nan
         ratio = abs(before)
+        if not math.isnan(speed_limit):  # the blow at the limit: the fastest crank
+            w = speed_limit / (ratio * lam3 * l1)
         speed = ratio * abs(w) * lam3 * l1
         if gamma <= 1.0:
             status = S.no_impact  # the rocker does not reverse at the node
@@ -372,25 +417,43 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
             status = S.wrong_branch
         elif count > 1:
             status = S.second_special_position
+    if math.isnan(before) and not math.isnan(speed_limit):
+        w = nan  # no blow, no speed to derive from its limit
     return (status, lam0, lam2, lam3, gamma, rk, before, after, ratio, speed, turns_out,
-            mu_min, mu_opp, branch, phi_star, count_out, rk_max)
+            mu_min, mu_opp, branch, phi_star, count_out, rk_max, size, l1, w)
 
 
 @njit(**KERNEL_OPTIONS)
-def crank_rocker_block(params, geometry_tol, out, status):
+def working_transmission_angle(lam0, lam2, lam3, phi_star, window, mu_opposite, tol):
+    """The smallest (acute) transmission angle over the crank turn outside
+    |phi1 - phi1*| < window. The angle depends on phi1 only through |DB|^2, monotone in
+    phi1 between the dead centres, so its extremes over the stroke lie at the window's two
+    edges (mirror images: one value) and at the dead centre opposite the node."""
+    if window <= 0.0:
+        return 0.0  # the node itself: all links collinear
+    edge = phi_star + window
+    mu_edge = transmission_angle_half(math.sin(0.5 * edge), math.cos(0.5 * edge), lam0, 1.0,
+                                      lam2, lam3, tol)
+    return min(mu_edge, mu_opposite)
+
+
+@njit(**KERNEL_OPTIONS)
+def crank_rocker_block(params, geometry_tol, window, out, status):
     """Evaluate a block of grid points: params (n_params, n), out (n_outputs, n), status (n,)."""
     for i in range(params.shape[1]):
         (status[i], out[O.lambda0, i], out[O.lambda2, i], out[O.lambda3, i], out[O.gamma, i],
          out[O.restitution_kinematic, i], out[O.transfer_before, i], out[O.transfer_after, i],
          out[O.impact_transfer_ratio, i], out[O.impact_speed, i],
-         out[O.crank_turns_fully, i], out[O.transmission_angle_min, i],
+         out[O.crank_turns_fully, i], out[O.transmission_angle_working, i],
          out[O.transmission_angle_opposite, i], out[O.assembly_branch, i],
          out[O.special_crank_angle, i], out[O.special_position_count, i],
-         out[O.restitution_kinematic_max, i]) = _point(
+         out[O.restitution_kinematic_max, i], out[O.envelope, i], out[O.crank_length, i],
+         out[O.omega1, i]) = _point(
             int(params[P.type, i]), params[P.R, i], params[P.largest_link, i],
             params[P.lambda0, i], params[P.lambda2, i], params[P.lambda3, i],
             int(params[P.base_root, i]), params[P.crank_length, i], params[P.omega1, i],
-            params[P.sigma, i], geometry_tol)
+            params[P.sigma, i], geometry_tol, params[P.envelope, i],
+            params[P.impact_speed_limit, i], window)
 
 
 def run(params, method):
@@ -399,8 +462,8 @@ def run(params, method):
     n = params.shape[1]
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
-    crank_rocker_block(params, method.geometry_tol, out, status)
-    w = params[P.omega1]
+    crank_rocker_block(params, method.geometry_tol, method.working_window, out, status)
+    w = out[O.omega1]
     out[O.blow_energy] = (0.5 * params[P.rocker_inertia] * (out[O.transfer_before] * w) ** 2
                           if "blow_energy" in method.outputs else np.nan)
     out[O.blow_rate] = (np.where(np.isfinite(out[O.transfer_before]),

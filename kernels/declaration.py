@@ -33,6 +33,7 @@ class Quantity:
     (``harmonics = "auto"``). ``used_when`` restricts where the quantity means something:
     ``{"type": ("b", "general")}`` says it is used only when ``type`` takes one of those values
     (a quantity given where it is not used is an error, not silently ignored).
+    ``replaces``: the parameter this one stands in for (the kernel derives it).
     """
 
     name: str
@@ -49,6 +50,9 @@ class Quantity:
     choices: dict | None = None
     aliases: dict | None = None
     used_when: dict = field(default_factory=dict)
+    #: another parameter this one is given instead of (envelope for crank_length): where
+    #: this one is given, the other's default is not used (its code is NaN, not recorded)
+    replaces: str | None = None
 
     def encode(self, value) -> float:
         """The kernel's code for a value (a word, a number or None for "not given": NaN)."""

@@ -52,6 +52,7 @@ LAW_GENERALIZED, LAW_KINEMATIC = 0, 1
 MOTOR_LINEAR, MOTOR_CONSTANT = 0, 1
 START_RUNNING, START_REST = 0, 1
 MATERIAL = -1.0  # design_restitution = "material": the synthesis makes Rk = -R
+FOR_DELTA = -1.0  # flywheel_inertia = "for_delta_target": sized for method.delta_target
 
 # defaults: the test machine (docs/machine.md §3): [CR] Table 1 at lambda2 = 2.5, type a,
 # R = 0.3, crank 0.1 m, tilt 25 degrees, the kinetostatic test mechanism's links
@@ -74,8 +75,9 @@ def _rules(given: dict) -> str | None:
     if "general" in types and len(ratios) < 3:
         missing = [n for n in ("lambda0", "lambda2", "lambda3") if n not in ratios]
         return f"{missing[0]}: required for type general (lambda0, lambda2 and lambda3)"
-    if given.get("outputs", set()) & set(FLYWHEEL_OUTPUTS) and "kinematic" in given.get(
-            "impact_law", ()):
+    if (given.get("outputs", set()) & set(FLYWHEEL_OUTPUTS)
+            or "for_delta_target" in given.get("flywheel_inertia", ())) and "kinematic" in \
+            given.get("impact_law", ()):
         return ("outputs: the flywheel outputs need impact_law = \"generalized\"; the "
                 "kinematic law fixes the crank's speed ratio at the blow (-R/Rk), so no "
                 "flywheel holds a speed fluctuation")
@@ -137,8 +139,10 @@ DECLARATION = Mechanism(
                  default=3 * 0.25**2 / 12, **_NONNEG),
         Quantity("J3", "kg m2", "rocker centroidal moment of inertia", "J3",
                  default=8 * 0.15**2 / 12 + 0.02, **_NONNEG),
-        Quantity("flywheel_inertia", "kg m2", "flywheel on the crank shaft (J_f)", "J_f",
-                 default=5.0, **_NONNEG),
+        Quantity("flywheel_inertia", "kg m2", "flywheel on the crank shaft (J_f); "
+                 "\"for_delta_target\": the flywheel that holds the speed fluctuation at "
+                 "method.delta_target (its exact root)", "J_f", default=5.0,
+                 aliases={"for_delta_target": FOR_DELTA}, **_NONNEG),
         Quantity("motor_law", "1", "motor torque-speed law: linear M0 (1 - omega1/"
                  "omega_idle), or constant M0", default="linear",
                  choices={"linear": MOTOR_LINEAR, "constant": MOTOR_CONSTANT}),
@@ -164,6 +168,8 @@ DECLARATION = Mechanism(
                  choices={"generalized": LAW_GENERALIZED, "kinematic": LAW_KINEMATIC}),
     ),
     outputs=(
+        Output("flywheel_inertia", "kg m2", "the flywheel, given or sized for "
+               "method.delta_target", "J_f", echoes="flywheel_inertia"),
         Output("mean_crank_speed", "rad s-1", "time-mean crank speed over the steady "
                "cycle (2 pi / T_c)", "ω_mean"),
         Output("speed_fluctuation", "1", "coefficient of speed fluctuation (omega_max - "
@@ -867,9 +873,10 @@ def design_data(pr, snap):
         if not r_design < 1.0:  # gamma = infinity: no linkage
             return S.no_real_synthesis, none, nan
     (status, lam0, lam2, lam3, gamma, rk, before, after, ratio, speed, turns, mu_min,
-     mu_opp, sigma, start, count, rk_max) = linkage_point(
+     mu_opp, sigma, start, count, rk_max, size, l1, w) = linkage_point(
         int(pr[P.type]), r_design, pr[P.largest_link], pr[P.lambda0], pr[P.lambda2],
-        pr[P.lambda3], int(pr[P.base_root]), pr[P.crank_length], 1.0, 0.0, snap)
+        pr[P.lambda3], int(pr[P.base_root]), pr[P.crank_length], 1.0, 0.0, snap, nan, nan,
+        0.0)
     if status == LINKAGE.second_special_position:  # a second node inside the cycle: the
         return S.degenerate, none, nan  # one-node model does not hold
     if status == LINKAGE.no_impact or status == LINKAGE.no_special_position:
@@ -883,11 +890,28 @@ def design_data(pr, snap):
     if status != LINKAGE.ok:
         return S.nonfinite, none, nan
     crank_own = pr[P.J1] + pr[P.m1] * ((pr[P.s1] * pr[P.crank_length]) ** 2 + pr[P.q1] ** 2)
-    m = machine_data(pr, lam0, lam2, lam3, sigma, start, snap, pr[P.flywheel_inertia],
-                     1.0, 1.0)
+    # a flywheel still to be sized (FOR_DELTA) is none for the singularity test
+    m = machine_data(pr, lam0, lam2, lam3, sigma, start, snap,
+                     max(pr[P.flywheel_inertia], 0.0), 1.0, 1.0)
     if inertia_is_singular(m):
         return S.singular_inertia, m, crank_own
     return S.ok, m, crank_own
+
+
+@njit(**INNER_OPTIONS)
+def sized_flywheel(m, crank_own, r, law, settings, max_revolutions, start_mode, delta):
+    """The flywheel whose steady state has speed fluctuation delta (the inverted input of
+    flywheel_inertia = "for_delta_target"): the classical estimate at the mean speed of a
+    first solve with a unit flywheel, then the exact root; NaN where none is found."""
+    status, cycle, nd, mm = solve(m, crank_own, 1.0, r, law, settings, max_revolutions,
+                                  start_mode)
+    if status != S.ok:
+        return math.nan
+    guess = classical_flywheel(nd, r, mm, crank_own, delta, 2.0 * math.pi / cycle.rev.period)
+    if not math.isfinite(guess):
+        return math.nan
+    return exact_flywheel(m, crank_own, r, law, settings, max_revolutions, start_mode, delta,
+                          guess)
 
 
 @njit(**INNER_OPTIONS)
@@ -903,8 +927,15 @@ def design(pr, snap, tol, max_revolutions, start_mode, delta, flywheels, peaks, 
     if status != S.ok:
         return status
     settings = Settings(METHOD_DOPRI5, tol, tol, 0.0, 10 ** 6, 2.0 * math.pi + 1.0)
-    status, cycle, nd, m = solve(m, crank_own, pr[P.flywheel_inertia], r, law, settings,
-                                 max_revolutions, start_mode)
+    flywheel = pr[P.flywheel_inertia]
+    if flywheel == FOR_DELTA:  # the flywheel a delta target asks for: sized first
+        flywheel = sized_flywheel(m, crank_own, r, law, settings, max_revolutions,
+                                  start_mode, delta)
+        if not math.isfinite(flywheel):
+            return S.no_convergence
+    out[O.flywheel_inertia] = flywheel
+    status, cycle, nd, m = solve(m, crank_own, flywheel, r, law, settings, max_revolutions,
+                                 start_mode)
     out[O.revolutions], out[O.n_steps] = cycle.revolutions, cycle.steps
     if status != S.ok:
         return status

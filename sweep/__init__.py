@@ -9,10 +9,10 @@ The Python API (the same functions the ``sweep`` command line calls)::
     sweep.chart(atlas, x="R", y="largest_link", color="impact_speed").savefig("v.png")
 
 ``Sweep`` (``from_toml``, ``from_dict``), ``run``, ``open_atlas``, ``query``, ``chart``,
-``profile``, ``boundaries``, ``info``, ``parameters``, ``example``, ``examples`` and
-``UserError`` are documented in ``sweep.api``. ``import sweep`` is light: each name is
-imported on first use, and heavy libraries (numba, xarray, dask, matplotlib) by the
-functions that need them.
+``profile``, ``boundaries``, ``pareto``, ``with_requirements``, ``info``, ``parameters``,
+``example``, ``examples`` and ``UserError`` are documented in ``sweep.api``. ``import sweep``
+is light: each name is imported on first use, and heavy libraries (numba, xarray, dask,
+matplotlib) by the functions that need them.
 
 The import names ``sweep`` and ``kernels`` are generic (PyPI has unrelated packages with the
 same names); install impact-sweep in its own environment.
@@ -21,7 +21,8 @@ same names); install impact-sweep in its own environment.
 __version__ = "0.1.0"
 
 __all__ = ["Sweep", "UserError", "boundaries", "chart", "example", "examples", "info",
-           "open_atlas", "open_boundaries", "parameters", "profile", "query", "run"]
+           "open_atlas", "open_boundaries", "parameters", "pareto", "profile", "query",
+           "run", "with_requirements"]
 
 
 def __getattr__(name: str):

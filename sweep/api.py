@@ -29,10 +29,12 @@ if TYPE_CHECKING:
     import xarray
     from matplotlib.figure import Figure
 
+    from sweep.fronts import Front
     from sweep.spec import Sweep
 
 __all__ = ["Sweep", "UserError", "boundaries", "chart", "example", "examples", "info",
-           "open_atlas", "open_boundaries", "parameters", "profile", "query", "run"]
+           "open_atlas", "open_boundaries", "parameters", "pareto", "profile", "query",
+           "run", "with_requirements"]
 
 #: an atlas computed in memory (``run`` without a path) may take at most this much
 IN_MEMORY_LIMIT = 2 * 1024**3  # bytes
@@ -137,6 +139,9 @@ def write(sweep: Sweep, target: Path, *, force: bool = False, resume: bool = Fal
     from sweep import resources, runner, store
 
     store.check_target(target, force or resume)
+    if sweep.designs is not None and target.resolve() == Path(sweep.designs.record["atlas"]):
+        raise UserError("output: would overwrite the atlas this sweep's designs come from "
+                        "(grid.from); write to another file")
     if resume and target.exists():
         raise UserError(f"resume: {target} is already complete")
     chart_path = target.with_suffix(".png") if sweep.chart else None
@@ -263,10 +268,27 @@ def _atlas(atlas) -> xarray.Dataset:
                     f"{type(atlas).__name__}")
 
 
+def with_requirements(atlas, require):
+    """The atlas with the requirements ``require`` (limits as text, "impact_speed <= 10")
+    evaluated into its ``requirements`` flag and ``requirement_margin``; unchanged for
+    none."""
+    from sweep import requirements
+
+    if not require:
+        return atlas
+    if isinstance(require, str):
+        require = [require]
+    units = {name: var.attrs.get("units", "") for name, var in atlas.data_vars.items()
+             if "flag_meanings" not in var.attrs and var.dtype.kind == "f"}
+    limits = requirements.check(tuple(requirements.parse_limit(text, units)
+                                      for text in require))
+    return requirements.with_requirements(atlas, limits)
+
+
 def query(atlas, where: str | None = None, *, sort: str | None = None,
           descending: bool = False, limit: int | None = None,
-          columns: list[str] | None = None, at: Mapping[str, Any] | None = None
-          ) -> pandas.DataFrame:
+          columns: list[str] | None = None, at: Mapping[str, Any] | None = None,
+          require: list[str] | None = None, rank_all: bool = False) -> pandas.DataFrame:
     """The designs of an atlas that satisfy ``where``, as a pandas DataFrame: one row per
     grid point, its axes first, flags as their meanings (``status == "ok"``).
 
@@ -276,7 +298,10 @@ def query(atlas, where: str | None = None, *, sort: str | None = None,
     first with ``descending``. ``columns`` picks variables (default: every variable with
     one value per grid point); a profile is shown at the angle ``at`` gives, e.g.
     ``{"crank_angle": "90deg"}`` (or a number in the axis's units). ``limit``: at most
-    that many rows; ``frame.attrs["matched"]`` says how many matched in all.
+    that many rows; ``frame.attrs["matched"]`` says how many matched in all. ``require``:
+    limits ("impact_speed <= 10") evaluated into the ``requirements`` flag (replacing the
+    atlas's own); a design that fails the requirements is never ranked above one that meets
+    them, unless ``rank_all``.
     """
     from sweep.selection import at_values, parse, select
 
@@ -287,14 +312,16 @@ def query(atlas, where: str | None = None, *, sort: str | None = None,
         raise UserError(f"limit: a whole number >= 1, not {limit!r}")
     ds = _atlas(atlas)
     with reading(ds):
+        ds = with_requirements(ds, require)
         return select(ds, where, sort=sort, limit=limit, columns=columns,
-                      descending=descending, at=at_values(at))
+                      descending=descending, at=at_values(at), rank_all=rank_all)
 
 
 def chart(atlas, x: str, y: str, color: str, *, path: str | os.PathLike | None = None,
           at: Mapping[str, Any] | None = None, degrees: bool = True,
           all_status: bool = False, boundaries: Any = None,
-          overlay: str | None = None, force: bool = False) -> Figure:
+          overlay: str | None = None, force: bool = False,
+          require: list[str] | None = None) -> Figure:
     """A design chart of ``color`` over ``x`` and ``y`` as a matplotlib Figure (saved as a
     PNG too where ``path`` is given).
 
@@ -303,6 +330,7 @@ def chart(atlas, x: str, y: str, color: str, *, path: str | os.PathLike | None =
     design value are drawn in greys named by their status (``all_status``: colour them
     too). One panel per value of a third grid axis; ``at`` takes other axes at one value
     ({axis: number or "60deg"}). Angles are drawn in degrees unless ``degrees=False``.
+    ``require``: limits evaluated into the ``requirements`` flag, e.g. to colour by it.
     ``boundaries``: the refined crossings (a Dataset or the path ``boundaries`` wrote),
     drawn as lines; ``overlay``: a numeric output drawn as labelled contour lines on top.
     An existing PNG is overwritten only with ``force``.
@@ -315,6 +343,7 @@ def chart(atlas, x: str, y: str, color: str, *, path: str | os.PathLike | None =
         boundaries = open_boundaries(boundaries)
     ds = _atlas(atlas)
     with reading(ds):
+        ds = with_requirements(ds, require)
         fig = design_figure(ds, x, y, color, ok_only=not all_status, degrees=degrees,
                             at=at_values(at), boundaries=boundaries, overlay=overlay)
     if out is not None:
@@ -389,9 +418,10 @@ def boundaries(atlas, var: str = "status", tol: float = 1e-8, *,
                       resume=resume, force=force, progress=progress)
 
 
-def info(atlas) -> str:
+def info(atlas, require: list[str] | None = None) -> str:
     """What an atlas's designs were computed with, in words and units; the range of every
-    output; status counts; provenance. A boundaries file: its crossings by sides."""
+    output; status counts (and with ``require``, how many designs meet those limits);
+    provenance. A boundaries file: its crossings by sides."""
     from sweep import registry
     from sweep.describe import atlas_text, boundaries_text
 
@@ -405,8 +435,63 @@ def info(atlas) -> str:
     name = ds.attrs.get("mechanism", "")
     mech = registry.get(name).declaration if name in registry.names() else None
     with reading(ds):
+        ds = with_requirements(ds, require)
         return atlas_text(ds, str(atlas) if isinstance(atlas, (str, os.PathLike))
                           else "(in memory)", mech)
+
+
+def pareto(atlas, maximize: list[str] | str = (), minimize: list[str] | str = (), *,
+           where: str | None = None, require: list[str] | None = None, pick: str = "knee",
+           weights: list[float] | None = None, path: str | os.PathLike | None = None,
+           chart: str | os.PathLike | None = None, degrees: bool = True,
+           force: bool = False) -> Front:
+    """The Pareto front of an atlas's feasible designs (status ok, requirements met,
+    ``where``) in the objectives ``maximize`` and ``minimize`` (output names), and the one
+    design the rule ``pick`` names: ``knee`` (nearest the ideal point, each objective
+    scaled over the front), ``lexicographic`` (the objectives in the order given, maxima
+    first) or ``weighted`` (``weights``, one per objective, on the scaled objectives).
+
+    Returns a ``Front``: ``front.designs`` (an xarray Dataset over ``design``, every
+    variable with its attributes, ``picked`` marking the pick), ``front.picked_design``.
+    ``path``: the selection written as netCDF (a ``.nc``; a chained sweep's source);
+    ``chart``: the front over the feasible cloud as a PNG. ``require`` adds limits as in
+    ``query``. Existing files are overwritten only with ``force``.
+    """
+    from sweep import fronts
+    from sweep.selection import parse
+    from sweep.store import check_target
+
+    if where is not None:
+        parse(where)
+    target = None if path is None else Path(path)
+    if target is not None:
+        check_target(target, force)
+    picture = _png(chart, force)
+    ds = _atlas(atlas)
+    source = ds.encoding.get("source", "")
+    with reading(ds):
+        ds = with_requirements(ds, require)
+        result = fronts.front(ds, maximize, minimize, where=where, pick=pick,
+                              weights=weights, source=str(source))
+        result.designs.load()
+        fig = None if picture is None else fronts.figure(ds, result, where, degrees)
+    if target is not None:
+        write_selection(result.designs, target)
+    if fig is not None:
+        save_figure(fig, picture)
+    return result
+
+
+def write_selection(ds: xarray.Dataset, target: Path) -> None:
+    """A selection of designs (a front) as netCDF, written under a temporary name and
+    renamed (never half)."""
+    from sweep.metadata import history_line
+    from sweep.store import atomic
+
+    ds = ds.copy()
+    ds.attrs["history"] = history_line()
+    with atomic(target) as tmp:
+        ds.to_netcdf(tmp, engine="netcdf4")
 
 
 def parameters(mechanism: str | None = None) -> str:

@@ -199,6 +199,9 @@ def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = Tr
     from sweep.metadata import usable_mask
 
     for axis, name in (("x", x), ("y", y), ("color", color)):
+        if name in ("requirements", "requirement_margin") and name not in ds.variables:
+            raise UserError(f"{axis}: this atlas has no requirements; give them with "
+                            "--require 'NAME <= NUMBER' (or a spec's [requirements])")
         if name not in ds.variables:
             raise UserError(f"{axis}: unknown variable {name!r}; allowed: "
                             + ", ".join(sorted(map(str, ds.variables))))
@@ -247,8 +250,10 @@ def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = Tr
     if is_flag or is_count:
         if is_flag:
             names = flag_names(var)
-            has_value = np.ones(var.shape, bool)
-            present = sorted(int(c) for c in np.unique(var.values) if int(c) in names)
+            # status is drawn everywhere; another flag where the design has values
+            has_value = np.ones(var.shape, bool) if color == "status" else usable
+            present = sorted(int(c) for c in np.unique(np.asarray(var.values)[has_value])
+                             if int(c) in names)
             colour_of = {c: category_colour(c, names) for c in present}
         else:  # a count: each value its own category, in the order of the values
             values = np.asarray(var.values, dtype=float)

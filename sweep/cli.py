@@ -187,11 +187,15 @@ def parameters(mechanism):
 @cli.command(short_help="What an atlas (or boundaries file) holds and how it was made.",
              epilog=_epilog("sweep info crank_rocker_atlas.nc", "sweep info cr.bounds.nc"))
 @click.argument("atlas_file", metavar="ATLAS")
-def info(atlas_file):
+@click.option("--require", "require", multiple=True, metavar="LIMIT",
+              help="a requirement, e.g. 'impact_speed <= 10' or "
+                   "'transmission_angle_working >= 40deg' (repeat for more): evaluated into "
+                   "the requirements flag")
+def info(atlas_file, require):
     """What an atlas's designs were computed with (grid, fixed parameters and method, in words
     and units), the range of every output, status counts and provenance; for a boundaries
     file, its crossings by sides with what explains them."""
-    click.echo(api.info(atlas_file))
+    click.echo(api.info(atlas_file, list(require)))
 
 
 @cli.command(short_help="Select designs from an atlas with a safe expression language.",
@@ -213,12 +217,17 @@ def info(atlas_file):
               help="profiles at this value of their axis (nearest), e.g. crank_angle=90")
 @click.option("--degrees", is_flag=True,
               help="print angles in degrees (--where and --sort stay in the atlas's radians)")
+@click.option("--require", "require", multiple=True, metavar="LIMIT",
+              help="a requirement, e.g. 'impact_speed <= 10' or "
+                   "'transmission_angle_working >= 40deg' (repeat for more): evaluated into "
+                   "the requirements flag")
+@click.option("--rank-all", is_flag=True,
+              help="rank designs that fail a requirement among those that meet them")
 @click.option("--format", "fmt", type=click.Choice(["table", "csv", "json"]), default="table")
-def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt):
+def query(atlas_file, where, sort, descending, limit, columns, at, degrees, require,
+          rank_all, fmt):
     """Select designs from an atlas with a safe expression language; flags print as their
     meanings, the table prints units under its header."""
-    import json
-
     from sweep.selection import at_values, in_degrees, parse, units_of
 
     if where is not None:
@@ -227,32 +236,123 @@ def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt)
     cols = [c.strip() for c in columns.split(",") if c.strip()] if columns else None
     with api.open_atlas(atlas_file) as ds:
         frame = api.query(ds, where, sort=sort, limit=limit, columns=cols,
-                          descending=descending, at=list(at))
+                          descending=descending, at=list(at), require=list(require),
+                          rank_all=rank_all)
+        ds = api.with_requirements(ds, list(require))
         matched = frame.attrs["matched"]
         if degrees:
             frame = in_degrees(ds, frame)
         units = units_of(ds, frame.columns, degrees)
-    if fmt == "csv":
-        click.echo(frame.to_csv(index=False), nl=False)
-    elif fmt == "json":
-        # Python's shortest repr of each float: no digits beyond what the value carries
-        records = [{k: (None if isinstance(v, float) and v != v else
-                        v.item() if hasattr(v, "item") else v) for k, v in row.items()}
-                   for row in frame.to_dict(orient="records")]
-        click.echo(json.dumps(records))
-    elif not len(frame):
+    if fmt == "table" and not len(frame):
         click.echo("no matching points")
     else:
-        import pandas as pd
-
-        header = pd.MultiIndex.from_arrays([list(frame.columns),
-                                            [f"[{'-' if u == '1' else u}]" if u else ""
-                                             for u in units]])
-        click.echo(frame.set_axis(header, axis=1).to_string(index=False))
+        click.echo(_rows_text(frame, units, fmt), nl=fmt != "csv")
     if fmt == "table" or (limit is None and len(frame) > 50):
         shown = f"{len(frame):,} of {matched:,} matching points" if len(frame) < matched else \
             f"{matched:,} matching points"
         click.echo(shown, err=fmt != "table")
+
+
+def _records(frame) -> list[dict]:
+    """Rows as JSON-able dicts: Python's shortest repr of each float (no digits beyond what
+    the value carries), NaN as null."""
+    return [{k: (None if isinstance(v, float) and v != v else
+                 v.item() if hasattr(v, "item") else v) for k, v in row.items()}
+            for row in frame.to_dict(orient="records")]
+
+
+def _rows_text(frame, units: list[str], fmt: str) -> str:
+    """A DataFrame as CSV, JSON records, or a table with units under its header."""
+    import json
+
+    if fmt == "csv":
+        return frame.to_csv(index=False)
+    if fmt == "json":
+        return json.dumps(_records(frame))
+    import pandas as pd
+
+    header = pd.MultiIndex.from_arrays([list(frame.columns),
+                                        [f"[{'-' if u == '1' else u}]" if u else ""
+                                         for u in units]])
+    return frame.set_axis(header, axis=1).to_string(index=False)
+
+
+@cli.command(short_help="The Pareto front of an atlas's feasible designs, and one pick.",
+             epilog=_epilog(
+                 "sweep pareto cr.nc --max impact_speed --min envelope",
+                 "sweep pareto cr.nc --max blow_rate --min envelope --require "
+                 "'impact_speed <= 10' --chart front.png -o front.nc",
+                 "sweep pareto m.nc --max blow_energy --min motor_power_mean --min "
+                 "dynamic_force_peak_D --pick weighted --weights 1,1,2"))
+@click.argument("atlas_file", metavar="ATLAS")
+@click.option("--max", "maximize", multiple=True, metavar="NAME",
+              help="an output to maximise (repeat for more)")
+@click.option("--min", "minimize", multiple=True, metavar="NAME",
+              help="an output to minimise (repeat for more)")
+@click.option("--where", default=None, help="only designs satisfying this condition")
+@click.option("--require", "require", multiple=True, metavar="LIMIT",
+              help="a requirement, e.g. 'impact_speed <= 10' (repeat for more): replaces "
+                   "the atlas's own")
+@click.option("--pick", type=click.Choice(["knee", "lexicographic", "weighted"]),
+              default="knee", show_default=True,
+              help="the rule that picks one design: nearest the ideal point (objectives "
+                   "scaled over the front), objectives in the order given, or a weighted "
+                   "sum of the scaled objectives")
+@click.option("--weights", default=None, metavar="W1,W2,...",
+              help="with --pick weighted: one weight per objective, maxima first, then "
+                   "minima, each in the order given")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
+              help="write the front as netCDF (every variable and attribute kept): a "
+                   "chained sweep's source")
+@click.option("--chart", "chart_path", type=click.Path(dir_okay=False), default=None,
+              metavar="PNG", help="draw the front over the feasible designs")
+@click.option("--degrees", is_flag=True, help="print angles in degrees")
+@click.option("--format", "fmt", type=click.Choice(["table", "csv", "json"]), default="table")
+@click.option("--force", is_flag=True, help="overwrite existing output files")
+def pareto(atlas_file, maximize, minimize, where, require, pick, weights, output, chart_path,
+           degrees, fmt, force):
+    """The non-dominated feasible designs (status ok, requirements met, --where) of any
+    number of objectives, and the design a rule picks, printed with all its outputs."""
+    import json
+
+    from sweep.fronts import describe
+    from sweep.selection import in_degrees, units_of
+
+    with api.open_atlas(atlas_file) as ds:
+        result = api.pareto(ds, list(maximize), list(minimize), where=where,
+                            require=list(require), pick=pick,
+                            weights=None if weights is None else weights.split(","),
+                            path=output, chart=chart_path, degrees=True, force=force)
+    designs = result.designs
+    dims = ["design"]
+    columns = [c for c in designs.coords if designs[c].dims == ("design",)] + \
+        [o.name for o in result.objectives if o.name not in designs.coords] + \
+        [n for n in ("requirement_margin", "status") if n in designs.data_vars]
+    frame = api.query(designs, columns=list(dict.fromkeys(c for c in columns
+                                                          if c not in dims)))
+    if degrees:
+        frame = in_degrees(designs, frame)
+    units = units_of(designs, frame.columns, degrees)
+    picked = describe(result, degrees)
+    if fmt == "json":
+        click.echo(json.dumps({"objectives": [o.text for o in result.objectives],
+                               "pick": pick, "candidates": result.candidates,
+                               "front": _records(frame),
+                               "picked": {name: value for name, value, _, _ in picked}}))
+        return
+    click.echo(_rows_text(frame, units, fmt), nl=fmt != "csv")
+    if fmt == "csv":
+        return
+    click.echo(f"{len(frame):,} designs on the front of {result.candidates:,} feasible "
+               f"({', '.join(o.text for o in result.objectives)})")
+    click.echo(f"\npicked ({pick}): design {result.picked}")
+    width = max(len(name) for name, _, _, _ in picked)
+    for name, value, unit, long_name in picked:
+        shown = f"{value} {unit}".strip()
+        click.echo(f"  {name:<{width}}  {shown:<24} {long_name}")
+    for label, target in (("front", output), ("chart", chart_path)):
+        if target:
+            click.echo(f"{label}: {Path(target).resolve()}")
 
 
 @cli.command(short_help="A design chart (PNG) of one output over two grid axes.",
@@ -277,9 +377,13 @@ def query(atlas_file, where, sort, descending, limit, columns, at, degrees, fmt)
 @click.option("--overlay", default=None, metavar="NAME",
               help="a numeric output drawn as labelled contour lines on top, e.g. "
                    "stability_margin over the regime")
+@click.option("--require", "require", multiple=True, metavar="LIMIT",
+              help="a requirement, e.g. 'impact_speed <= 10' or "
+                   "'transmission_angle_working >= 40deg' (repeat for more): evaluated into "
+                   "the requirements flag")
 @click.option("--force", is_flag=True, help="overwrite an existing PNG")
 def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file, overlay,
-          force):
+          require, force):
     """Design chart (PNG) of COLOR over X and Y, with units; a flag variable (regime,
     status) is drawn as categories, cells without a value in greys named by their status."""
     from sweep.selection import at_values
@@ -291,7 +395,7 @@ def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file,
         bounds = api.open_boundaries(bounds_file) if bounds_file else None
         api.chart(ds, x, y, color, path=output, all_status=all_status,
                   degrees=not radians, at=list(at), boundaries=bounds, overlay=overlay,
-                  force=force)
+                  force=force, require=list(require))
     click.echo(f"chart: {Path(output).resolve()}")
 
 

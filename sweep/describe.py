@@ -8,7 +8,8 @@ import numpy as np
 
 from kernels.declaration import Mechanism, Quantity, used_when_text
 from sweep.selection import flag_names
-from sweep.spec import domain_text, is_used
+from sweep.domains import domain_text
+from sweep.spec import is_used
 
 
 def units_text(units: str) -> str:
@@ -103,6 +104,11 @@ def _axis_text(ds, name: str) -> str:
 
 
 def _range_text(var) -> str:
+    if var.dtype.kind in "OUS":  # words: how many of each
+        words, counts = np.unique([v.decode() if isinstance(v, bytes) else str(v)
+                                   for v in np.asarray(var.values).ravel()],
+                                  return_counts=True)
+        return ", ".join(f'"{w}" {n:,}' for w, n in zip(words, counts))
     values = np.asarray(var.values, dtype=float)
     finite = values[np.isfinite(values)]
     missing = values.size - finite.size
@@ -157,11 +163,34 @@ def atlas_text(ds, path: str, mech: Mechanism | None) -> str:
                                    initial_indent=" " * (width + 4),
                                    subsequent_indent=" " * (width + 4)))
     for name in ds.coords:
-        if name not in grid_dims:
-            lines.append(f"  {name:{width}s}  [{units_text(ds[name].attrs.get('units', ''))}]"
-                         f"  {_axis_text(ds, name)} (profile axis)")
+        if name in grid_dims:
+            continue
+        units = units_text(ds[name].attrs.get("units", ""))
+        if ds[name].dims == (name,):
+            lines.append(f"  {name:{width}s}  [{units}]  {_axis_text(ds, name)} (profile axis)")
+        else:  # what each design of a chained sweep sets, or where it came from
+            lines.append(f"  {name:{width}s}  [{units}]  {_range_text(ds[name])} (per "
+                         f"{', '.join(map(str, ds[name].dims))})")
+    if "pareto" in ds.attrs:  # a front written by sweep pareto
+        front = json.loads(ds.attrs["pareto"])
+        lines += textwrap.wrap(
+            f"Pareto front of {front.get('candidates', 0):,} feasible designs of "
+            f"{front.get('source_atlas') or 'an atlas'}: "
+            + ", ".join(front.get("objectives", []))
+            + (f"; where {front['where']}" if front.get("where") else "")
+            + (f"; requirements {', '.join(front['requirements'])}"
+               if front.get("requirements") else "")
+            + f"; picked ({front.get('pick')}): design {front.get('picked_design')}", 96,
+            initial_indent="  ", subsequent_indent="    ")
+    if "source_atlas" in ds.attrs:
+        source = json.loads(ds.attrs["source_atlas"])
+        lines += textwrap.wrap(
+            f"designs from: {source.get('atlas', '?')} ({source.get('title', '')}; "
+            f"{source.get('mechanism', '?')}, code {source.get('code_version', '?')})", 96,
+            initial_indent="  ", subsequent_indent="    ")
     given = {k: {v} for k, v in spec.get("fixed", {}).items()}
-    for name in grid_dims:
+    for name in [*grid_dims, *(c for c in ds.coords if c not in grid_dims
+                               and set(ds[c].dims) <= set(grid_dims))]:
         values = ds[name].values
         given[name] = {v.decode() if isinstance(v, bytes) else v for v in values.tolist()}
     fixed, unused = [], []
@@ -206,6 +235,12 @@ def atlas_text(ds, path: str, mech: Mechanism | None) -> str:
     if "model" in method:
         lines += textwrap.wrap(f"model: {method['model']}", 96, initial_indent="  ",
                                subsequent_indent="    ")
+    if "requirements" in ds.data_vars:
+        limits = json.loads(ds["requirements"].attrs.get("requirements", "[]"))
+        lines += ["", "requirements (every design is checked; `requirements` names the limit "
+                      "it fails by the most):"]
+        lines += [f"  {text}" for text in limits]
+        lines.append("  " + _flag_counts(ds["requirements"]))
     status = ds["status"]
     lines += ["", "status: " + _flag_counts(status)]
     usable = status.attrs.get("usable_flags")
@@ -213,7 +248,7 @@ def atlas_text(ds, path: str, mech: Mechanism | None) -> str:
         lines.append(f"  statuses with design values: {', '.join(usable.split())}")
     lines += ["", "outputs (range over all points; NaN where a value does not exist):"]
     for name in ds.data_vars:
-        if name == "status":
+        if name in ("status", "requirements"):
             continue
         var = ds[name]
         units = units_text(var.attrs.get("units", ""))

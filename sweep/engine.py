@@ -17,6 +17,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from sweep.metadata import annotate, flag_codes
+from sweep.requirements import evaluate as evaluate_requirements
 from sweep.spec import Sweep
 
 MIN_BLOCKS = 8
@@ -51,16 +52,17 @@ def sample_parameters(sweep: Sweep) -> np.ndarray:
     """A few points that take every code path of a sweep: each combination of the values of
     its categorical axes (model, tool, type ...), the other axes at their first value. Run
     once before the blocks, it compiles what the sweep needs, and only that."""
-    axis_of = {axis.name: axis for axis in sweep.axes}
+    codes_of = {name: codes for axis in sweep.axes
+                for name, codes in axis.parameters().items()}
     values = []
     for p in sweep.mechanism.parameters:
-        axis = axis_of.get(p.name)
-        if axis is None:
+        codes = codes_of.get(p.name)
+        if codes is None:
             values.append([sweep.fixed[p.name]])
         elif p.choices is not None:
-            values.append(list(dict.fromkeys(axis.codes.tolist())))
+            values.append(list(dict.fromkeys(codes.tolist())))
         else:
-            values.append([axis.codes[0]])
+            values.append([codes[0]])
     return np.array(list(itertools.product(*values)), dtype=float).T
 
 
@@ -93,14 +95,19 @@ def numba_without_blas():
             del sys.modules[BLAS_PROBE]
 
 
-def _parameter_matrix(sweep: Sweep, n: int, axis_values) -> np.ndarray:
-    """The kernel's parameter matrix (n_parameters, n): a fixed parameter's code in its row,
-    ``axis_values(j)`` (the n codes of grid axis j) in the row of an axis's parameter."""
+def _parameter_matrix(sweep: Sweep, n: int, positions) -> np.ndarray:
+    """The kernel's parameter matrix (n_parameters, n): a fixed parameter's code in its row;
+    a grid axis's parameter (or each parameter a design sets) at ``positions(j)``, the n
+    points' places along axis j."""
     params = np.empty((len(sweep.mechanism.parameters), n))
-    axis_of = {axis.name: j for j, axis in enumerate(sweep.axes)}
+    source = {name: (j, codes) for j, axis in enumerate(sweep.axes)
+              for name, codes in axis.parameters().items()}
     for row, p in enumerate(sweep.mechanism.parameters):
-        j = axis_of.get(p.name)
-        params[row] = sweep.fixed[p.name] if j is None else axis_values(j)
+        if p.name in source:
+            j, codes = source[p.name]
+            params[row] = codes[positions(j)]
+        else:
+            params[row] = sweep.fixed[p.name]
     return params
 
 
@@ -108,25 +115,26 @@ def block_parameters(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarra
     """The kernel's parameter matrix (n_parameters, n_points) for one block of the grid."""
     bshape = tuple(stop - start for start, stop in location)
 
-    def axis_values(j):
+    def positions(j):
         start, stop = location[j]
         view = [1] * len(bshape)
         view[j] = stop - start
-        return np.broadcast_to(sweep.axes[j].codes[start:stop].reshape(view), bshape).ravel()
+        return np.broadcast_to(np.arange(start, stop).reshape(view), bshape).ravel()
 
-    return _parameter_matrix(sweep, math.prod(bshape), axis_values)
+    return _parameter_matrix(sweep, math.prod(bshape), positions)
 
 
 def point_parameters(sweep: Sweep, points: np.ndarray) -> np.ndarray:
     """The kernel's parameter matrix (n_parameters, n) at grid points given by their flat
     (C-order) indices (``sweep boundaries`` moves one axis's row between them)."""
     index = np.unravel_index(np.asarray(points, dtype=np.int64), sweep.shape)
-    return _parameter_matrix(sweep, len(index[0]), lambda j: sweep.axes[j].codes[index[j]])
+    return _parameter_matrix(sweep, len(index[0]), lambda j: index[j])
 
 
 def run_block(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
-    """Selected outputs, status and profiles of one block, stacked as
-    (n_scalar + 1 + n_profile * n_angle, *block_shape)."""
+    """Selected outputs, status, the requirements' flag and margin (where the sweep has
+    requirements) and profiles of one block, stacked as
+    (n_scalar + 1 [+ 2] + n_profile * n_angle, *block_shape)."""
     bshape = tuple(stop - start for start, stop in location)
     out, status, prof = sweep.kernel(block_parameters(sweep, location), sweep.method_record)
     index = sweep.mechanism.output_index
@@ -134,13 +142,25 @@ def run_block(sweep: Sweep, location: list[tuple[int, int]]) -> np.ndarray:
     pindex = sweep.mechanism.profile_index
     prows = [getattr(pindex, name) for name in sweep.profile_outputs]
     n_ang = prof.shape[2]
-    result = np.empty((len(rows) + 1 + len(prows) * n_ang,) + bshape)
+    extra = requirement_rows(sweep)
+    result = np.empty((len(rows) + 1 + extra + len(prows) * n_ang,) + bshape)
     result[:len(rows)] = out[rows].reshape((len(rows),) + bshape)
     result[len(rows)] = status.reshape(bshape)
+    if extra:
+        code, margin = evaluate_requirements(
+            {limit.name: out[getattr(index, limit.name)] for limit in sweep.requirements},
+            sweep.requirements)
+        result[len(rows) + 1] = code.reshape(bshape)
+        result[len(rows) + 2] = margin.reshape(bshape)
     for k, row in enumerate(prows):
-        start = len(rows) + 1 + k * n_ang
+        start = len(rows) + 1 + extra + k * n_ang
         result[start:start + n_ang] = prof[row].T.reshape((n_ang,) + bshape)
     return result
+
+
+def requirement_rows(sweep: Sweep) -> int:
+    """Rows a block carries for the requirements: their flag and margin, or none."""
+    return 2 if sweep.requirements else 0
 
 
 class Plan:
@@ -152,9 +172,10 @@ class Plan:
         self.angles = sweep.profile_coordinate()
         self.n_out = len(sweep.scalar_outputs)
         self.n_prof = len(sweep.profile_outputs)
+        self.n_req = requirement_rows(sweep)
         n_ang = self.angles.shape[0]
         # a block's memory grows with the profile length: keep it near the requested size
-        per_point = self.n_out + 1 + self.n_prof * n_ang
+        per_point = self.n_out + 1 + self.n_req + self.n_prof * n_ang
         target = max(1, sweep.run.chunk * (self.n_out + 1) // per_point)
         if "chunk" not in sweep.run.model_fields_set:
             # at least MIN_BLOCKS blocks, so that a small grid of an expensive mechanism
@@ -186,9 +207,12 @@ class Plan:
             o = mech.output(name)
             out[name] = flag_codes(result[k], o) if o.is_flag else result[k]
         out["status"] = result[self.n_out].astype(np.int8)
+        if self.n_req:
+            out["requirements"] = result[self.n_out + 1].astype(np.int8)
+            out["requirement_margin"] = result[self.n_out + 2]
         n_ang = self.angles.shape[0]
         for k, name in enumerate(self.sweep.profile_outputs):
-            start = self.n_out + 1 + k * n_ang
+            start = self.n_out + 1 + self.n_req + k * n_ang
             out[name] = np.moveaxis(result[start:start + n_ang], 0, -1)
         return out
 
@@ -228,6 +252,9 @@ def build(sweep: Sweep, lazy: bool = True):
     n_out, n_ang = plan.n_out, plan.angles.shape[0]
     dims = [axis.name for axis in sweep.axes]
     coords = {axis.name: (axis.name, axis.values) for axis in sweep.axes}
+    for axis in sweep.axes:  # a chained sweep: what each design sets, and where it came from
+        coords.update({name: (axis.name, values)
+                       for name, (values, _) in axis.coordinates.items()})
     if plan.n_prof:
         pdim = sweep.mechanism.profile_dim.name
         coords[pdim] = (pdim, plan.angles)
@@ -239,6 +266,9 @@ def build(sweep: Sweep, lazy: bool = True):
             flag = sweep.mechanism.output(name).is_flag
             data[name] = (dims, placeholder(np.int8 if flag else np.float64, plan.shape))
         data["status"] = (dims, placeholder(np.int8, plan.shape))
+        if plan.n_req:
+            data["requirements"] = (dims, placeholder(np.int8, plan.shape))
+            data["requirement_margin"] = (dims, placeholder(np.float64, plan.shape))
         for name in sweep.profile_outputs:
             data[name] = (dims + [pdim], placeholder(np.float64, plan.shape + (n_ang,)))
         return annotate(Template(coords, data), sweep, plan.chunk_shape)
@@ -256,8 +286,11 @@ def build(sweep: Sweep, lazy: bool = True):
             rows = rows.map_blocks(flag_codes, o, dtype=np.int8)
         data[name] = (dims, rows)
     data["status"] = (dims, stacked[n_out].astype(np.int8))
+    if plan.n_req:
+        data["requirements"] = (dims, stacked[n_out + 1].astype(np.int8))
+        data["requirement_margin"] = (dims, stacked[n_out + 2])
     for k, name in enumerate(sweep.profile_outputs):
-        start = n_out + 1 + k * n_ang
+        start = n_out + 1 + plan.n_req + k * n_ang
         data[name] = (dims + [pdim], da.moveaxis(stacked[start:start + n_ang], 0, -1))
     ds = xr.Dataset(data, coords=coords)
     return annotate(ds, sweep, plan.chunk_shape)

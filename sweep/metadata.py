@@ -92,6 +92,11 @@ def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
             # fixed-width chars, not HDF5 variable-length strings: reopening a file with
             # vlen strings after closing another handle on it segfaults (xarray #8289)
             ds[axis.name].encoding["dtype"] = "S1"
+        for name, (values, attrs) in axis.coordinates.items():
+            ds[name].attrs.update(attrs)
+            ds[name].encoding["_FillValue"] = None
+            if np.asarray(values).dtype.kind in "OSU":
+                ds[name].encoding["dtype"] = "S1"
     if mech.profile_dim is not None and mech.profile_dim.name in ds.coords:
         pdim = mech.profile_dim
         ds[pdim.name].attrs.update(units=pdim.units, long_name=pdim.long_name)
@@ -113,6 +118,16 @@ def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
     ds["status"].attrs.update(status_attributes(mech))
     ds["status"].encoding.update(zlib=level > 0, complevel=level, chunksizes=chunk_shape,
                                  _FillValue=None)
+    if sweep.requirements:
+        from sweep import requirements
+
+        ds["requirements"].attrs.update(requirements.attributes(sweep.requirements))
+        ds["requirements"].encoding.update(zlib=level > 0, complevel=level,
+                                           chunksizes=chunk_shape, _FillValue=None)
+        ds["requirement_margin"].attrs.update(requirements.MARGIN_ATTRIBUTES)
+        ds["requirement_margin"].encoding.update(zlib=level > 0, complevel=level,
+                                                 shuffle=True, chunksizes=chunk_shape,
+                                                 _FillValue=np.nan)
     ds.attrs.update(
         Conventions=CONVENTIONS,
         title=sweep.title,
@@ -121,6 +136,8 @@ def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
         references=mech.references,
         mechanism=mech.name,
         spec=sweep.spec_json(),
+        requirements=json.dumps([limit.text for limit in sweep.requirements]),
+        **({"source_atlas": json.dumps(sweep.designs.provenance)} if sweep.designs else {}),
         method=json.dumps({"model": mech.summary, **sweep.method}),
         package_versions=json.dumps(package_versions()),
         code_version=code_version(),

@@ -109,7 +109,8 @@ class Request:
         self.flag_attrs = {k: ds[var].attrs[k] for k in ("flag_values", "flag_meanings")}
         self.meaning = flag_names(ds[var])
         self.axes = [d for d, axis in enumerate(self.sweep.axes)
-                     if not axis.parameter.categorical and axis.values.size > 1]
+                     if not axis.parameter.categorical and not axis.is_design
+                     and axis.values.size > 1]
         if not self.axes:
             raise UserError("atlas: no numeric grid axis with two or more values, so no "
                             "edge to refine")
@@ -125,6 +126,13 @@ class Request:
         """The variable's int8 codes from a kernel result, as the atlas stores them."""
         if self.var == "status":
             return status.astype(np.int8)
+        if self.var == "requirements":  # from the outputs, as the run evaluated them
+            from sweep.requirements import evaluate
+
+            index = self.mechanism.output_index
+            limits = self.sweep.requirements
+            return evaluate({limit.name: out[getattr(index, limit.name)] for limit in limits},
+                            limits)[0]
         return flag_codes(out[getattr(self.mechanism.output_index, self.var)],
                           self.mechanism.output(self.var))
 
@@ -185,7 +193,8 @@ def evaluate(sweep, params: np.ndarray, workers: int, method=None):
 def _parameters(request: Request, edges: dict, which: np.ndarray, x: np.ndarray):
     """Parameter matrix of the brackets ``which`` with their edge axis at ``x``."""
     params = engine.point_parameters(request.sweep, edges["point"][which])
-    row_of_axis = np.array([request.mechanism.parameters.index(axis.parameter)
+    row_of_axis = np.array([-1 if axis.is_design  # never an edge's axis
+                            else request.mechanism.parameters.index(axis.parameter)
                             for axis in request.sweep.axes])
     params[row_of_axis[edges["axis"][which]], np.arange(which.size)] = x
     return params

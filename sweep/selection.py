@@ -53,6 +53,10 @@ class _Evaluator:
                                 "quoted strings")
             return v if isinstance(v, str) else np.float64(v)
         if isinstance(node, ast.Name):
+            if node.id in ("requirements", "requirement_margin") \
+                    and node.id not in self.ds.variables:
+                raise UserError("where: this atlas has no requirements; give them with "
+                                "--require 'NAME <= NUMBER' (or a spec's [requirements])")
             if node.id not in self.ds.variables:
                 raise UserError(f"where: unknown name {node.id!r}; allowed: "
                                 + ", ".join(sorted(map(str, self.ds.variables))))
@@ -104,6 +108,13 @@ class _Evaluator:
             if isinstance(x, xr.DataArray) and "flag_meanings" in x.attrs and isinstance(y, str):
                 code = _flag_code(x, y)
                 return (code, x) if swap else (x, code)
+        for x, y in ((a, b), (b, a)):  # a word a categorical variable never takes: a typo
+            if isinstance(x, xr.DataArray) and x.dtype.kind in "OUS" and isinstance(y, str):
+                words = sorted({v.decode() if isinstance(v, bytes) else str(v)
+                                for v in np.unique(x.values)})
+                if y not in words:
+                    raise UserError(f"where: {x.name} has no value {y!r}; allowed: "
+                                    + ", ".join(f'"{w}"' for w in words))
         for x, y in ((a, b), (b, a)):
             text = isinstance(x, str) or (isinstance(x, xr.DataArray) and x.dtype.kind in "OUS")
             other_text = isinstance(y, str) or (isinstance(y, xr.DataArray)
@@ -144,13 +155,18 @@ def parse(expr: str) -> ast.Expression:
     return tree
 
 
+def value_of(ds: xr.Dataset, tree: ast.Expression):
+    """The value of a parsed expression over the atlas: a DataArray, a number or a word."""
+    try:
+        return _Evaluator(ds).value(tree)
+    except RecursionError:
+        raise UserError("where: expression nested too deeply") from None
+
+
 def evaluate(ds: xr.Dataset, expr: str) -> xr.DataArray:
     """Boolean mask over the atlas grid (broadcast to all grid dims)."""
     tree = parse(expr)
-    try:
-        mask = _Evaluator(ds).value(tree)
-    except RecursionError:
-        raise UserError("where: expression nested too deeply") from None
+    mask = value_of(ds, tree)
     if not (isinstance(mask, xr.DataArray) and mask.dtype == bool):
         raise UserError("where: the expression must be a condition, e.g. \"x > 1\"")
     dims = [d for d in ds["status"].dims]
@@ -259,11 +275,14 @@ def flag_names(var: xr.DataArray) -> dict[int, str] | None:
 
 def select(ds: xr.Dataset, where: str | None, sort: str | None = None,
            limit: int | None = None, columns: list[str] | None = None,
-           descending: bool = False, at: dict[str, float] | None = None):
+           descending: bool = False, at: dict[str, float] | None = None,
+           rank_all: bool = False):
     """Rows (a pandas DataFrame) of the grid points that satisfy ``where``, sorted by
     ``sort`` (ascending, or descending: the best designs first), flags as their meanings.
-    Profiles (variables over an extra axis such as crank_angle) are shown only where
-    asked, at the value of their axis given in ``at``."""
+    Where the atlas has requirements, a design that fails one is never ranked above one
+    that meets them all, unless ``rank_all``. Profiles (variables over an extra axis such
+    as crank_angle) are shown only where asked, at the value of their axis given in
+    ``at``."""
     import pandas as pd
 
     ds, _ = take_at(ds, at)
@@ -297,6 +316,9 @@ def select(ds: xr.Dataset, where: str | None, sort: str | None = None,
     if sort is not None:  # by code, before codes become words; NaN last either way
         frame = frame.sort_values(sort, kind="stable", ascending=not descending,
                                   na_position="last")
+        if "requirements" in ds.variables and not rank_all:  # the ones that meet them first
+            met = np.asarray(ds["requirements"].transpose(*dims).values)[index] == 0
+            frame = frame.iloc[np.argsort(~met[frame.index.to_numpy()], kind="stable")]
     for c in frame.columns:
         names = flag_names(ds[c]) if c in ds.variables else None
         if names is not None:

@@ -22,6 +22,7 @@ from pydantic import ValidationError
 
 from kernels.declaration import Mechanism, Quantity, used_when_text
 from sweep import registry
+from sweep.domains import check_value, domain_text
 from sweep.errors import UserError
 
 MAX_POINTS = 10**10  # more than this is a typo, not a sweep
@@ -69,19 +70,38 @@ class SpecModel(_Strict):
     method: dict[str, Any] = {}
     run: RunSettings = RunSettings()
     chart: ChartSettings | None = None
+    requirements: dict[str, Any] = {}
 
 
 @dataclass
 class Axis:
-    """One grid dimension: its labels (coordinate values) and the kernel codes."""
+    """One grid dimension: its labels (coordinate values) and the kernel codes; or the
+    designs of another atlas (a chained sweep), each setting several parameters."""
 
     parameter: Quantity
     values: np.ndarray  # float64, or str labels for a categorical parameter
     codes: np.ndarray  # float64 as the kernel reads them
+    #: a design axis: {parameter: kernel codes per design}, and its coordinates
+    #: {name: (values per design, attrs)}
+    columns: dict = field(default_factory=dict)
+    coordinates: dict = field(default_factory=dict)
 
     @property
     def name(self) -> str:
         return self.parameter.name
+
+    @property
+    def is_design(self) -> bool:
+        return bool(self.columns)
+
+    def parameters(self) -> dict[str, np.ndarray]:
+        """{parameter: kernel codes along the axis}: the axis's own, or its designs'."""
+        return self.columns if self.columns else {self.name: self.codes}
+
+
+#: the design axis of a chained sweep: which design of the source's selection
+DESIGN_AXIS = Quantity("design", "1", "design of the source atlas's selection (its place "
+                       "in the source's grid order)", integer=True)
 
 
 @dataclass
@@ -100,10 +120,13 @@ class Sweep:
     title: str
     spec: dict = field(default_factory=dict)  # the spec with defaults filled, JSON-able
     source: dict = field(default_factory=dict)  # the document as given (+ run overrides)
+    requirements: tuple = ()  # the limits a design must meet (sweep.requirements.Limit)
+    designs: Any = None  # a chained sweep's resolved source (sweep.chains.Designs)
 
     def __reduce__(self):
-        # rebuilt from the document it came from (deterministic), e.g. on a cluster worker
-        return validate, (self.source,)
+        # rebuilt from the document it came from (deterministic), e.g. on a cluster worker;
+        # a chained sweep's designs travel with it (the worker may not see the source)
+        return validate, (self.source, self.designs)
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Sweep:
@@ -173,56 +196,6 @@ class Sweep:
                        source=source)
 
 
-# ---------------------------------------------------------------- domains, in words
-
-def domain_text(q: Quantity) -> str:
-    """What values a quantity allows, in words: 'one of "a", "b"', 'a number > 0' ..."""
-    if q.choices is not None:
-        return "one of " + ", ".join(_literal(c) for c in q.choices)
-    kind = "a whole number" if q.integer else "a number"
-    lo, hi = q.minimum, q.maximum
-    if math.isinf(lo) and math.isinf(hi):
-        text = ("any finite non-zero number" if q.nonzero else "any finite number")
-        if q.integer:
-            text = text.replace("number", "whole number")
-    else:
-        if math.isinf(hi):
-            text = f"{kind} {'>=' if q.min_inclusive else '>'} {lo:g}"
-        elif math.isinf(lo):
-            text = f"{kind} {'<=' if q.max_inclusive else '<'} {hi:g}"
-        else:
-            text = (f"{kind} in {'[' if q.min_inclusive else '('}{lo:g}, {hi:g}"
-                    f"{']' if q.max_inclusive else ')'}")
-        if q.nonzero:
-            text += ", not 0"
-    if q.aliases:
-        text = " or ".join(_literal(a) for a in q.aliases) + " or " + text
-    return text
-
-
-def _literal(value) -> str:
-    return f'"{value}"' if isinstance(value, str) else repr(value)
-
-
-def check_value(q: Quantity, value) -> str | None:
-    """None if ``value`` is allowed for ``q``, else what is allowed."""
-    if q.choices is not None:
-        ok = any(value == c and type(value) is type(c) for c in q.choices)
-        return None if ok else domain_text(q)
-    if q.aliases and isinstance(value, str) and value in q.aliases:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return domain_text(q)
-    if q.integer and not isinstance(value, int):
-        return domain_text(q)
-    v = float(value)
-    if (not math.isfinite(v) or v < q.minimum or (v == q.minimum and not q.min_inclusive)
-            or v > q.maximum or (v == q.maximum and not q.max_inclusive)
-            or (q.nonzero and v == 0.0)):
-        return domain_text(q)
-    return None
-
-
 # ---------------------------------------------------------------- reading a spec
 
 #: a spec file larger than this is not a spec (a grid of values belongs in ranges)
@@ -263,43 +236,49 @@ def load(path: str | Path) -> Sweep:
     return parse(text, source=str(path))
 
 
-def validate(raw: dict) -> Sweep:
-    """A spec document (as read from TOML) -> a Sweep, or a one-line UserError."""
+def validate(raw: dict, designs=None) -> Sweep:
+    """A spec document (as read from TOML) -> a Sweep, or a one-line UserError.
+    ``designs``: a chained sweep's source already resolved (sweep.chains.Designs)."""
     try:
-        return _validate(raw)
+        return _validate(raw, designs)
     except RecursionError:
         raise UserError("spec: tables or arrays nested too deeply") from None
 
 
-def _validate(raw: dict) -> Sweep:
+def _validate(raw: dict, designs=None) -> Sweep:
     model = _structure(raw)
     kernel = _mechanism(model)
     mech = kernel.declaration
     _known_names(model, mech)
-    axes = _grid(model, mech)
-    fixed, fixed_echo = _fixed(model, mech)
+    designs = _source(model, mech, designs)
+    axes = _grid(model, mech, designs)
+    fixed, fixed_echo = _fixed(model, mech, designs)
     method, record = _method(model, mech)
-    given = _given(model, axes, method)
+    given = _given(model, mech, axes, method)
     _where_used(mech, given, method)
     outputs = _outputs(model, mech, axes, record)
     given["outputs"] = set(outputs)
     _mechanism_rules(mech, given)
     record = record._replace(outputs=tuple(outputs))
+    limits = _requirements(model, mech, record)
     _chart(model, mech, axes, outputs)
     fixed_echo, method = _in_use(mech, given, fixed_echo, method)
     spec = {
         "mechanism": mech.name,
         "title": model.title or mech.title,
         "outputs": outputs,
-        "grid": dict(model.grid),
+        "grid": ({"from": designs.record} if designs else {})
+        | {k: v for k, v in model.grid.items() if k != "from"},
         "fixed": fixed_echo,
         "method": method,
         "run": model.run.model_dump(),
     }
     if model.chart is not None:
         spec["chart"] = model.chart.model_dump()
+    if limits:
+        spec["requirements"] = dict(model.requirements)
     return Sweep(mech, kernel.run, axes, fixed, outputs, method, record, model.run,
-                 model.chart, spec["title"], spec, raw)
+                 model.chart, spec["title"], spec, raw, limits, designs)
 
 
 def _pydantic_message(err: ValidationError) -> str:
@@ -334,7 +313,7 @@ def _known_names(model: SpecModel, mech: Mechanism) -> None:
         raise UserError("grid: at least one axis is required")
     for table, entries in (("grid", model.grid), ("fixed", model.fixed)):
         for name in entries:
-            if name not in known:
+            if name not in known and (table, name) != ("grid", "from"):
                 raise UserError(f"{table}.{name}: unknown parameter of {mech.name}; "
                                 f"allowed: {', '.join(known)}")
     for name in model.fixed:
@@ -347,14 +326,39 @@ def _known_names(model: SpecModel, mech: Mechanism) -> None:
                             f"allowed: {', '.join(keys) or 'none'}")
 
 
-def _grid(model: SpecModel, mech: Mechanism) -> list[Axis]:
+def _source(model: SpecModel, mech: Mechanism, designs=None):
+    """A chained sweep's designs (``grid.from``), resolved from the source atlas unless
+    given; their parameters are set by them alone."""
+    if "from" not in model.grid:
+        return None
+    from sweep import chains
+
+    if designs is None:
+        designs = chains.resolve(model.grid["from"], mech)
+    for name in designs.columns:
+        for table, entries in (("grid", model.grid), ("fixed", model.fixed)):
+            if name in entries:
+                raise UserError(f"{table}.{name}: set by the source designs (grid.from); "
+                                "give it once")
+    return designs
+
+
+def _grid(model: SpecModel, mech: Mechanism, designs=None) -> list[Axis]:
     """The grid axes with their values and kernel codes, once the grid's size, counted from
-    the axis specifications, is known to be allowed (nothing is built before)."""
-    size = math.prod(axis_length(f"grid.{name}", entry) for name, entry in model.grid.items())
+    the axis specifications, is known to be allowed (nothing is built before); a chained
+    sweep's designs first."""
+    size = math.prod(designs.count if name == "from" else axis_length(f"grid.{name}", entry)
+                     for name, entry in model.grid.items())
     if size > MAX_POINTS:
         raise UserError(f"grid: {size:.3g} points; at most {MAX_POINTS:.0e} are allowed")
     axes = []
+    if designs is not None:
+        axes.append(Axis(DESIGN_AXIS, np.arange(designs.count, dtype=np.int64),
+                         np.arange(designs.count, dtype=float), designs.columns,
+                         designs.coordinates))
     for name, entry in model.grid.items():
+        if name == "from":
+            continue
         p = mech.parameter(name)
         labels, values = _axis_values(name, entry, p)
         axes.append(Axis(p, labels, np.array([p.encode(v) for v in values])))
@@ -381,11 +385,14 @@ def grid_shape(document: dict) -> tuple[int, ...] | None:
     """The grid's shape a spec document asks for, from its axis specifications alone (an
     atlas's recorded spec is compared with the atlas before it is run again); None where
     the document has no readable grid."""
+    from sweep.chains import declared_count
+
     grid = document.get("grid") if isinstance(document, dict) else None
     if not isinstance(grid, dict):
         return None
     try:
-        return tuple(axis_length(f"grid.{name}", entry) for name, entry in grid.items())
+        return tuple(declared_count(entry) if name == "from"
+                     else axis_length(f"grid.{name}", entry) for name, entry in grid.items())
     except UserError:
         return None
 
@@ -439,14 +446,19 @@ def _axis_values(name: str, entry: Any, p: Quantity) -> tuple[np.ndarray, list]:
                     "of values")
 
 
-def _fixed(model: SpecModel, mech: Mechanism) -> tuple[dict[str, float], dict[str, Any]]:
+def _fixed(model: SpecModel, mech: Mechanism,
+           designs=None) -> tuple[dict[str, float], dict[str, Any]]:
     """Kernel codes of every parameter not on the grid (given, default or NaN = not given),
     and the values as the atlas records them."""
     codes, echo = {}, {}
+    given = set(model.grid) | set(model.fixed) | set(designs.columns if designs else ())
+    replaced = {p.replaces for p in mech.parameters if p.replaces and p.name in given}
     for p in mech.parameters:
-        if p.name in model.grid:
+        if p.name in model.grid or (designs is not None and p.name in designs.columns):
             continue
-        if p.name in model.fixed:
+        if p.name in replaced and p.name not in model.fixed:
+            value = None  # derived by the kernel from what stands in for it
+        elif p.name in model.fixed:
             value = model.fixed[p.name]
             problem = check_value(p, value)
             if problem is not None:
@@ -473,9 +485,15 @@ def _method(model: SpecModel, mech: Mechanism) -> tuple[dict[str, Any], Any]:
     return words, mech.method_record(**words)
 
 
-def _given(model: SpecModel, axes: list[Axis], method: dict) -> dict[str, set]:
+def _given(model: SpecModel, mech: Mechanism, axes: list[Axis],
+           method: dict) -> dict[str, set]:
     """What the user set: {parameter: its values}, {"method.KEY": {value}}."""
-    given = {axis.name: set(_python_values(axis)) for axis in axes}
+    given = {}
+    for axis in axes:
+        if not axis.is_design:
+            given[axis.name] = set(_python_values(axis))
+        for name, codes in axis.columns.items():  # the words or numbers the designs set
+            given[name] = {mech.parameter(name).decode(c) for c in np.unique(codes).tolist()}
     for name, value in model.fixed.items():
         given[name] = {value}
     for name, value in model.method.items():
@@ -532,7 +550,7 @@ def _outputs(model: SpecModel, mech: Mechanism, axes: list[Axis], record) -> lis
     defaults = list(mech.default_outputs)
     profiles = [o.name for o in mech.profiles]
     profiling = bool(profiles) and len(mech.profile_coordinate(record)) > 0
-    on_grid = {axis.name for axis in axes}
+    on_grid = {name for axis in axes for name in axis.parameters()}
     echoes = {o.name for o in mech.outputs if o.echoes in on_grid}
     if model.outputs is None:
         wanted = defaults + (profiles if profiling else [])
@@ -552,10 +570,26 @@ def _outputs(model: SpecModel, mech: Mechanism, axes: list[Axis], record) -> lis
     return [name for name in wanted if name not in echoes]
 
 
+def _requirements(model: SpecModel, mech: Mechanism, record) -> tuple:
+    """The spec's limits, each on a numeric output the kernel computes (an output on
+    request must be asked for)."""
+    from sweep import requirements
+
+    limits = requirements.from_table(model.requirements,
+                                     requirements.numeric_outputs(mech))
+    for limit in limits:
+        if mech.output(limit.name).on_request and limit.name not in record.outputs:
+            raise UserError(f"requirements.{limit.name}: computed only on request; add it to "
+                            "outputs")
+    return limits
+
+
 def _chart(model: SpecModel, mech: Mechanism, axes: list[Axis], outputs: list[str]) -> None:
     if model.chart is None:
         return
     names = {axis.name for axis in axes} | set(outputs) | {"status"}
+    if model.requirements:
+        names |= {"requirements", "requirement_margin"}
     profiles = {p.name for p in mech.profiles}
     for axis in ("x", "y", "color"):
         v = getattr(model.chart, axis)
@@ -565,7 +599,7 @@ def _chart(model: SpecModel, mech: Mechanism, axes: list[Axis], outputs: list[st
         if v in profiles:
             raise UserError(f"chart.{axis}: {v!r} is a profile; pick an output with one "
                             "value per design")
-    numeric_axes = [a.name for a in axes if not a.parameter.categorical]
+    numeric_axes = [a.name for a in axes if not a.parameter.categorical and not a.is_design]
     for axis in ("x", "y"):
         if getattr(model.chart, axis) not in numeric_axes:
             raise UserError(f"chart.{axis}: {getattr(model.chart, axis)!r} is not a numeric "
@@ -581,13 +615,14 @@ def _chart(model: SpecModel, mech: Mechanism, axes: list[Axis], outputs: list[st
     by_name = {axis.name: axis for axis in axes}
     for name, value in model.chart.at.items():
         axis = by_name.get(name)
-        if axis is None or axis.parameter.categorical:
+        if axis is None or axis.parameter.categorical or axis.is_design:
             raise UserError(f"chart.at: {name!r} is not a numeric grid axis; allowed: "
-                            + ", ".join(a.name for a in axes if not a.parameter.categorical))
+                            + ", ".join(numeric_axes))
         lo, hi = float(np.min(axis.values)), float(np.max(axis.values))
         if not lo <= value <= hi:
             raise UserError(f"chart.at.{name}: {value:g} is outside the grid, {lo:g} to {hi:g}")
-    flags = ["status"] + [name for name in outputs if mech.output(name).is_flag]
+    flags = (["status"] + (["requirements"] if model.requirements else [])
+             + [name for name in outputs if mech.output(name).is_flag])
     if model.chart.boundaries is not None and model.chart.boundaries not in flags:
         raise UserError(f"chart.boundaries: {model.chart.boundaries!r} is not a flag variable "
                         "of this sweep; allowed: " + ", ".join(flags))

@@ -278,13 +278,16 @@ def _define(nc, ds) -> None:
             strings = np.array([str(v) for v in values])
             width = max(1, max(len(v.encode("utf-8")) for v in strings))
             nc.createDimension(f"{name}_strlen", width)
-            var = nc.createVariable(name, "S1", (name, f"{name}_strlen"))
+            var = nc.createVariable(name, "S1", ds[name].dims + (f"{name}_strlen",))
             var._Encoding = "utf-8"
             var[:] = strings.astype(f"U{width}")
         else:
-            var = nc.createVariable(name, values.dtype, (name,))
+            var = nc.createVariable(name, values.dtype, ds[name].dims)
             var[:] = values
         var.setncatts(dict(ds[name].attrs))
+    # coordinates that are not a dimension's (what each design of a chained sweep sets):
+    # named in each variable over their dimension, as CF and xarray read them
+    auxiliary = [name for name in ds.coords if ds[name].dims != (name,)]
     for name, item in ds.data_vars.items():
         enc = item.encoding
         fill = enc.get("_FillValue")
@@ -294,3 +297,6 @@ def _define(nc, ds) -> None:
             chunksizes=enc.get("chunksizes"),
             fill_value=False if fill is None else fill)
         var.setncatts(dict(item.attrs))
+        linked = [c for c in auxiliary if set(ds[c].dims) <= set(item.dims)]
+        if linked:
+            var.setncattr("coordinates", " ".join(linked))

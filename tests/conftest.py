@@ -1,3 +1,4 @@
+import contextlib
 import math
 
 import numpy as np
@@ -51,3 +52,25 @@ def flag_words(var) -> np.ndarray:
     meaning = dict(zip(np.atleast_1d(var.attrs["flag_values"]).tolist(),
                        var.attrs["flag_meanings"].split()))
     return np.vectorize(lambda v: meaning[int(v)], otypes=[object])(np.asarray(var.values))
+
+
+@contextlib.contextmanager
+def interrupted_after(blocks: int):
+    """A run inside stops with KeyboardInterrupt (Ctrl-C) once ``blocks`` blocks finished;
+    yields the list of the blocks' locations it was asked for."""
+    from sweep import engine
+
+    real, calls = engine.run_block, []
+
+    def stop(sweep, location):
+        calls.append(location)
+        if len(calls) > blocks:
+            raise KeyboardInterrupt
+        return real(sweep, location)
+
+    engine.run_block = stop
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            yield calls
+    finally:
+        engine.run_block = real

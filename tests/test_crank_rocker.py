@@ -276,7 +276,7 @@ def test_H10_double_change_point_is_detected():
 def test_general_four_bar_without_change_point_and_double_crank():
     out, status = crank_rocker_point(type="general", lambda0=3.0, lambda2=3.6, lambda3=2.2)
     assert status == "no_special_position"
-    assert out["crank_turns_fully"] == 1.0 and out["transmission_angle_min"] > 0.3
+    assert out["crank_turns_fully"] == 1.0 and out["transmission_angle_working"] > 0.3
     out, status = crank_rocker_point(type="general", lambda0=0.7, lambda2=1.6, lambda3=1.3)
     assert status == "no_impact"  # [SIX] stage 1: gamma < 1, link 3 keeps turning
     assert 0 < out["restitution_kinematic"] < 1
@@ -288,9 +288,36 @@ def test_transmission_angles_match_sampled_loop_closure():
     phi2, phi3 = fb.loop_closure(math.pi, lam0, 1.0, lam2, lam3, -1.0)
     mu = abs((phi3 - phi2 + math.pi) % (2 * math.pi) - math.pi)
     assert out["transmission_angle_opposite"] == pytest.approx(min(mu, math.pi - mu), abs=1e-12)
-    assert out["transmission_angle_min"] == 0.0  # collinear at the special position
     assert out["impact_speed"] == pytest.approx(
         out["impact_transfer_ratio"] * 30.0 * lam3 * 0.1, rel=1e-15)
+
+
+@pytest.mark.parametrize("design", [dict(type="a", largest_link=3.0),
+                                    dict(type="b", R=0.2, largest_link=12.0),
+                                    dict(type="c", R=0.35, largest_link=4.0),
+                                    dict(type="a", R=0.1, largest_link=25.0)])
+@pytest.mark.parametrize("window_deg", [10.0, 30.0, 60.0])
+def test_working_transmission_angle_is_the_sampled_minimum_outside_the_window(design,
+                                                                               window_deg):
+    """The smallest transmission angle over 20001 loop closures on the working stroke
+    (the crank turn outside the window around the node, its edges sampled) is the
+    kernel's; at the node itself it is 0 (all links collinear)."""
+    from tests.conftest import kernel_point
+
+    window = math.radians(window_deg)
+    out, status, _ = kernel_point("crank_rocker", {"working_window": window}, **design)
+    assert status == "ok"
+    lam0, lam2, lam3 = out["lambda0"], out["lambda2"], out["lambda3"]
+    node, sigma = out["special_crank_angle"], out["assembly_branch"]
+    sampled = math.inf
+    for phi in node + np.linspace(window, 2 * math.pi - window, 20001):
+        phi2, phi3 = fb.loop_closure(phi, lam0, 1.0, lam2, lam3, sigma)
+        mu = abs((phi3 - phi2 + math.pi) % (2 * math.pi) - math.pi)
+        sampled = min(sampled, mu, math.pi - mu)
+    assert out["transmission_angle_working"] == pytest.approx(sampled, abs=1e-12)
+    assert 0 < out["transmission_angle_working"] <= out["transmission_angle_opposite"]
+    phi2, phi3 = fb.loop_closure(node, lam0, 1.0, lam2, lam3, sigma)
+    assert abs(math.sin(phi3 - phi2)) < 1e-6  # the window is what keeps the 0 out
 
 
 def test_kernel_writes_status_for_every_point_of_a_block():

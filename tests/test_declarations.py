@@ -158,6 +158,8 @@ NEEDS = {
        for name in ("rotor_inertia_ratio", "motor_slope", "idle_speed")},
     **{("linkage_forces", name): dict(base_motion="rotating")
        for name in ("base_omega", "base_epsilon", "crank_pivot_x", "crank_pivot_y")},
+    **{("linkage_forces", name): dict(base_motion="harmonic")
+       for name in ("base_amplitude", "base_frequency_ratio", "base_phase")},
     ("impact_machine", "base_root"): dict(type="b", largest_link=14.0),
     **{("impact_machine", name): dict(type="general", lambda0=2.029159519725557,
                                       lambda2=2.5, lambda3=1.470840480274443)
@@ -165,6 +167,8 @@ NEEDS = {
 }
 VALUES = {("crank_rocker", "lambda0"): [2.0, 2.5], ("crank_rocker", "lambda2"): [3.0, 2.5],
           ("crank_rocker", "lambda3"): [2.0, 1.5], ("crank_rocker", "largest_link"): [3.0, 4.0],
+          ("crank_rocker", "envelope"): [0.5, 0.6],
+          ("crank_rocker", "impact_speed_limit"): [8.0, 10.0],
           ("rotary_pendulum", "kappa"): [1.2, 1.5],
           ("impact_machine", "lambda0"): [2.029159519725557, 2.2],
           ("impact_machine", "design_restitution"): [0.3, 0.35],
@@ -178,7 +182,9 @@ def _two_values(mechanism, p):
     if p.choices is not None:
         return list(p.choices)[:2]
     d = p.default
-    return [d, d * 1.1] if d else [0.0, 0.1]
+    if d:
+        return [d, d * 1.1]
+    return [0.0, 0.1] if p.minimum == 0.0 and p.min_inclusive else [1.0, 1.1]
 
 
 @pytest.mark.slow

@@ -12,12 +12,15 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent
-BLOCK = re.compile(r"^```(python|bash)\n(.*?)^```", re.MULTILINE | re.DOTALL)
+BLOCK = re.compile(r"^```(python|bash|toml)\n(.*?)^```", re.MULTILINE | re.DOTALL)
+FILE = re.compile(r"^# file: (\S+)\n")
 
 
 def code_blocks(path: Path) -> list[tuple[str, str]]:
-    """The ```python and ```bash blocks of a Markdown file, in order."""
-    return [(kind, body) for kind, body in BLOCK.findall(path.read_text(encoding="utf-8"))]
+    """The ```python and ```bash blocks of a Markdown file, in order, and the ```toml
+    blocks that begin with ``# file: NAME`` (written as that file where they stand)."""
+    return [(kind, body) for kind, body in BLOCK.findall(path.read_text(encoding="utf-8"))
+            if kind != "toml" or FILE.match(body)]
 
 
 def run_blocks(blocks, where: Path) -> None:
@@ -30,6 +33,9 @@ def run_blocks(blocks, where: Path) -> None:
     os.chdir(where)
     try:
         for kind, body in blocks:
+            if kind == "toml":
+                (where / FILE.match(body).group(1)).write_text(body, encoding="utf-8")
+                continue
             if kind == "python":
                 exec(compile(body, "<doc block>", "exec"), namespace)  # noqa: S102
                 continue
@@ -96,3 +102,15 @@ def test_the_readme_is_a_front_door():
     for target in re.findall(r"\]\(([^)#]+)\)", text):
         if not target.startswith("http"):
             assert (ROOT / target).exists(), target
+
+
+@pytest.mark.slow
+def test_the_decision_guide_runs_as_written(tmp_path):
+    """docs/guide/deciding.md end to end: the limits atlas, the chained forces, the front
+    and its chart, the picked design's own chained sweep and profile, the claim's query."""
+    blocks = code_blocks(ROOT / "docs" / "guide" / "deciding.md")
+    assert [k for k, _ in blocks].count("toml") == 2
+    run_blocks(blocks, tmp_path)
+    for name in ("limits.nc", "forces.nc", "front.nc", "front.png", "picked.nc",
+                 "picked.png"):
+        assert (tmp_path / name).is_file(), name

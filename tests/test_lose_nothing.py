@@ -14,6 +14,7 @@ import xarray as xr
 
 from sweep import runner, spec
 from sweep.store import partial_dir
+from tests.conftest import interrupted_after
 
 SLOW = '''
 mechanism = "linkage_forces"
@@ -89,22 +90,12 @@ def test_resumed_blocks_are_not_recomputed(tmp_path):
     total = len(list(engine.Plan(s.with_run(chunk=100)).locations()))
     store = partial_dir(target)
     # recreate an interrupted state from the finished atlas' blocks: run again, stop early
-    calls = []
-    real = engine.run_block
-
-    def stop_after_three(sweep, location):
-        calls.append(location)
-        if len(calls) > 3:
-            raise KeyboardInterrupt
-        return real(sweep, location)
-
-    engine.run_block = stop_after_three
+    with interrupted_after(3):
+        runner.run_sweep(s, tmp_path / "r2.nc", chunk=100, progress=False, workers=2)
+    stored = len(list(partial_dir(tmp_path / "r2.nc").glob("*.npy")))
+    assert stored == 3  # every block that finished was kept, though another failed
+    real, calls = engine.run_block, []
     try:
-        with pytest.raises(KeyboardInterrupt):
-            runner.run_sweep(s, tmp_path / "r2.nc", chunk=100, progress=False, workers=2)
-        stored = len(list(partial_dir(tmp_path / "r2.nc").glob("*.npy")))
-        assert stored == 3  # every block that finished was kept, though another failed
-        calls.clear()
         engine.run_block = lambda sweep, location: (calls.append(location),
                                                      real(sweep, location))[1]
         result = runner.run_sweep(s, tmp_path / "r2.nc", chunk=100, progress=False, workers=1,

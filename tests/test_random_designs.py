@@ -401,7 +401,13 @@ def test_crank_rocker_outputs_at_random_designs_against_a_50_digit_loop_closure(
         mu = math.acos((lam2 ** 2 + lam3 ** 2 - dist ** 2) / (2 * lam2 * lam3))
         assert out["transmission_angle_opposite"] == pytest.approx(min(mu, math.pi - mu),
                                                                    abs=1e-12)
-        assert out["transmission_angle_min"] == 0.0
+        # and at the edges of the 30-degree window around the node (the working stroke's
+        # smallest: the angle is monotone in |DB| between the dead centres)
+        dist = math.sqrt(lam0 ** 2 + 1 - 2 * lam0 * math.cos((math.pi if kind_c else 0.0)
+                                                            + math.pi / 6))
+        mu_edge = math.acos((lam2 ** 2 + lam3 ** 2 - dist ** 2) / (2 * lam2 * lam3))
+        assert out["transmission_angle_working"] == pytest.approx(
+            min(mu_edge, math.pi - mu_edge, out["transmission_angle_opposite"]), abs=1e-12)
         if d["type"] == "b":
             gmax = (1 + lam3) / (2 * math.sqrt(lam3))
             assert out["restitution_kinematic_max"] == pytest.approx((gmax - 1) / (gmax + 1),

@@ -18,7 +18,7 @@ TOL = 1e-9
 
 def run(samples=2880, profile_points=0, **kw):
     p = dict(EXAMPLE, **kw)
-    params = np.array([[p[name]] for name in sl.P._fields], dtype=float)
+    params = np.array([[p.get(name, np.nan)] for name in sl.P._fields], dtype=float)
     method = sl.DECLARATION.method_record(geometry_tol=TOL, samples=samples,
                                           profile_points=profile_points)
     out, status, prof = sl.run(params, method)

@@ -1,0 +1,348 @@
+"""From an atlas to a decision: the Pareto front of its feasible designs and one pick.
+
+A design is feasible when its status is usable (``ok``), it meets the atlas's requirements
+(its ``requirements`` flag is ``met``, where it has one) and it satisfies ``where``. The front
+is the feasible designs no other feasible design dominates in the objectives (each
+maximised or minimised), computed exactly by ``kernels.pareto``. A pick rule then names one:
+
+- ``knee``: the design nearest the ideal point, each objective scaled over the front to 0
+  at its best and 1 at its worst (the compromise design; on a two-objective front, where
+  the front bends most towards the ideal);
+- ``lexicographic``: best in the first objective, ties broken by the next, and so on;
+- ``weighted``: the least weighted sum of the scaled objectives.
+
+Ties of a rule go to the first design of the front (ordered by the first objective).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from sweep.errors import UserError
+
+PICK_RULES = ("knee", "lexicographic", "weighted")
+FEASIBLE = "feasible"
+OUTSIDE_WHERE = "outside_where"
+
+
+@dataclass(frozen=True)
+class Objective:
+    """An output to maximise or minimise (``sense``: "max" or "min")."""
+
+    name: str
+    sense: str
+
+    def minimised(self, values: np.ndarray) -> np.ndarray:
+        return -values if self.sense == "max" else values
+
+    @property
+    def text(self) -> str:
+        return f"{self.sense} {self.name}"
+
+
+@dataclass
+class Front:
+    """The non-dominated feasible designs of an atlas and the one a rule picked.
+
+    ``designs``: one entry per front design along the dimension ``design`` (ordered by the
+    first objective, best first): every variable of the atlas at that design with its
+    attributes, the grid axes as coordinates, ``grid_point`` (the design's flat index in
+    the atlas's grid) and ``picked`` (yes at the picked design). ``candidates``: how many
+    feasible designs had a value of every objective.
+    """
+
+    designs: xr.Dataset
+    objectives: tuple[Objective, ...]
+    picked: int
+    rule: str
+    candidates: int
+
+    @property
+    def picked_design(self) -> xr.Dataset:
+        """The picked design: every variable at it."""
+        return self.designs.isel(design=self.picked)
+
+
+def objectives(ds: xr.Dataset, maximize=(), minimize=()) -> tuple[Objective, ...]:
+    """The objectives, checked: numeric variables with one value per design, each once."""
+    wanted = [Objective(str(n), "max") for n in _names(maximize, "maximize")] + \
+        [Objective(str(n), "min") for n in _names(minimize, "minimize")]
+    if not wanted:
+        raise UserError("pareto: give at least one objective (--max NAME or --min NAME)")
+    dims = set(ds["status"].dims)
+    numeric = sorted(str(v) for v in ds.variables if set(ds[v].dims) <= dims and ds[v].ndim
+                     and "flag_meanings" not in ds[v].attrs and ds[v].dtype.kind in "fiu")
+    seen = set()
+    for o in wanted:
+        if o.name in seen:
+            raise UserError(f"pareto: {o.name} is given twice; an objective is maximised or "
+                            "minimised once")
+        seen.add(o.name)
+        if o.name not in ds.variables:
+            raise UserError(f"pareto: {o.name!r} is not a variable of this atlas; allowed: "
+                            + ", ".join(numeric))
+        var = ds[o.name]
+        if "flag_meanings" in var.attrs:
+            raise UserError(f"pareto: {o.name} is a flag ({var.attrs['flag_meanings']}), not "
+                            "a value to optimise; filter with --where or --require")
+        if not set(var.dims) <= dims:
+            raise UserError(f"pareto: {o.name} is a profile over "
+                            f"{', '.join(d for d in var.dims if d not in dims)}; an "
+                            "objective has one value per design")
+        if o.name not in numeric:
+            raise UserError(f"pareto: {o.name} is not numeric; allowed: " + ", ".join(numeric))
+    return tuple(wanted)
+
+
+def _names(names, where: str) -> list[str]:
+    if names is None:
+        return []
+    if isinstance(names, str):
+        return [names]
+    try:
+        return [str(n) for n in names]
+    except TypeError:
+        raise UserError(f"{where}: a name or a list of names of outputs") from None
+
+
+def pick_weights(rule: str, weights, objectives_: tuple[Objective, ...]) -> np.ndarray | None:
+    """The rule's weights, checked: only for ``weighted``, one positive number per
+    objective."""
+    if rule not in PICK_RULES:
+        raise UserError(f"pick: {rule!r} is not a rule; allowed: {', '.join(PICK_RULES)}")
+    if rule != "weighted":
+        if weights is not None:
+            raise UserError("weights: only with pick = weighted")
+        return None
+    if weights is None:
+        raise UserError("weights: pick = weighted needs one weight per objective, e.g. "
+                        "--weights 1,2")
+    if isinstance(weights, str):
+        weights = weights.split(",")
+    try:
+        w = np.array([float(x) for x in weights])
+    except (TypeError, ValueError):
+        raise UserError(f"weights: {weights!r} must be numbers, e.g. 1,2") from None
+    if len(w) != len(objectives_):
+        raise UserError(f"weights: {len(w)} given for {len(objectives_)} objectives; give one "
+                        "per objective, in their order")
+    if not np.all(np.isfinite(w) & (w >= 0)) or not np.any(w > 0):
+        raise UserError("weights: finite numbers >= 0, at least one > 0")
+    return w
+
+
+def classify(ds: xr.Dataset, where: str | None) -> tuple[np.ndarray, list[str]]:
+    """Each grid point's reason to be left out (0: feasible), and the reasons' names: the
+    status meaning where it is not usable, the requirement it fails (its flag meaning:
+    above_impact_speed), or outside_where."""
+    from sweep.metadata import usable_mask
+    from sweep.selection import evaluate, flag_names
+
+    dims = list(ds["status"].dims)
+    names = [FEASIBLE]
+    code = np.zeros(ds["status"].shape, np.int16)
+
+    def mark(mask, name):
+        nonlocal code
+        mask = mask & (code == 0)
+        if mask.any():
+            if name not in names:
+                names.append(name)
+            code = np.where(mask, np.int16(names.index(name)), code)
+
+    status = np.asarray(ds["status"].values)
+    usable = np.asarray(usable_mask(ds).values)
+    for value, meaning in (flag_names(ds["status"]) or {}).items():
+        mark(~usable & (status == value), meaning)
+    if "requirements" in ds.variables:
+        flags = np.asarray(ds["requirements"].transpose(*dims).values)
+        for value, meaning in (flag_names(ds["requirements"]) or {}).items():
+            if meaning != "met":
+                mark(flags == value, meaning)
+    if where:
+        mark(~np.asarray(evaluate(ds, where).values), OUTSIDE_WHERE)
+    return code, names
+
+
+def values_of(ds: xr.Dataset, objectives_: tuple[Objective, ...]) -> np.ndarray:
+    """The objectives at every grid point as (n_points, k), minimised form, C order."""
+    dims = list(ds["status"].dims)
+    columns = [o.minimised(np.asarray(ds[o.name].broadcast_like(ds["status"])
+                                      .transpose(*dims).values, dtype=float).ravel())
+               for o in objectives_]
+    return np.stack(columns, axis=1)
+
+
+def front(ds: xr.Dataset, maximize=(), minimize=(), where: str | None = None,
+          pick: str = "knee", weights=None, source: str = "") -> Front:
+    """The Pareto front of an atlas's feasible designs and the design ``pick`` names."""
+    from kernels.pareto import non_dominated
+
+    objectives_ = objectives(ds, maximize, minimize)
+    w = pick_weights(pick, weights, objectives_)
+    code, reasons = classify(ds, where)
+    values = values_of(ds, objectives_)
+    feasible = (code.ravel() == 0)
+    candidates = np.nonzero(feasible & np.all(np.isfinite(values), axis=1))[0]
+    if candidates.size == 0:
+        raise UserError("pareto: " + _why_empty(code, reasons, feasible, where))
+    keep = non_dominated(np.ascontiguousarray(values[candidates]))
+    points = candidates[keep]
+    points = points[np.lexsort(values[points].T[::-1])]  # best in the first objective first
+    chosen = _pick(values[points], pick, w)
+    designs = _selection(ds, points, chosen, objectives_, pick, w, where, len(candidates),
+                         source)
+    return Front(designs, objectives_, chosen, pick, len(candidates))
+
+
+def _why_empty(code, reasons, feasible, where) -> str:
+    counts = np.bincount(code.ravel(), minlength=len(reasons))
+    if feasible.any():
+        return ("no feasible design has a value of every objective (an output computed "
+                "only on request, or not at these designs)")
+    told = ", ".join(f"{reasons[k]} {counts[k]:,}" for k in np.argsort(-counts) if counts[k])
+    return ("no design is feasible (status ok, requirements met"
+            + (", where" if where else "") + f"): {told}")
+
+
+def scaled(values: np.ndarray) -> np.ndarray:
+    """Each objective over the front scaled to 0 at its best and 1 at its worst (0 where
+    the front has one value of it)."""
+    lo, hi = values.min(axis=0), values.max(axis=0)
+    span = np.where(hi > lo, hi - lo, 1.0)
+    return (values - lo) / span
+
+
+def _pick(values: np.ndarray, rule: str, weights) -> int:
+    if rule == "lexicographic":
+        return int(np.lexsort(values.T[::-1])[0])
+    s = scaled(values)
+    if rule == "weighted":
+        return int(np.argmin(s @ weights))
+    return int(np.argmin(np.sqrt(np.sum(s * s, axis=1))))
+
+
+def _selection(ds, points, chosen, objectives_, rule, weights, where, candidates, source):
+    dims = list(ds["status"].dims)
+    index = np.unravel_index(points, ds["status"].shape)
+    sel = ds.isel({d: xr.DataArray(index[j], dims="design") for j, d in enumerate(dims)})
+    sel = sel.assign_coords(grid_point=xr.DataArray(points.astype(np.int64), dims="design",
+                                                    attrs={"long_name": "flat (C-order) "
+                                                           "index of the design in the "
+                                                           "atlas's grid", "units": "1"}))
+    picked = np.zeros(len(points), np.int8)
+    picked[chosen] = 1
+    sel["picked"] = xr.DataArray(picked, dims="design", attrs={
+        "long_name": f"the design the {rule} rule picks", "units": "1",
+        "flag_values": np.array([0, 1], np.int8), "flag_meanings": "no yes"})
+    sel.attrs["pareto"] = json.dumps({
+        "objectives": [o.text for o in objectives_], "where": where or "",
+        "requirements": json.loads(ds["requirements"].attrs.get("requirements", "[]"))
+        if "requirements" in ds.variables else [],
+        "pick": rule, "weights": None if weights is None else [float(x) for x in weights],
+        "picked_design": int(chosen), "front_designs": int(len(points)),
+        "candidates": int(candidates), "source_atlas": source})
+    sel.attrs["title"] = f"Pareto front of {ds.attrs.get('title', 'an atlas')}"
+    for name in sel.variables:
+        sel[name].encoding = {}
+        if sel[name].dtype.kind in "OUS":
+            # fixed-width chars, not HDF5 vlen strings (xarray #8289; see metadata.annotate)
+            sel[name].encoding["dtype"] = "S1"
+        elif "flag_meanings" in sel[name].attrs or sel[name].dtype.kind in "iu":
+            sel[name].encoding["_FillValue"] = None
+    return sel
+
+
+def figure(ds: xr.Dataset, result: Front, where: str | None = None, degrees: bool = True):
+    """The front over the feasible designs' cloud (the first two objectives; a third, if
+    any, colours the front), the designs left out in greys named by why, and the pick."""
+    from matplotlib.figure import Figure
+
+    from sweep.charts import BLANK_GREYS, _label, _shown, made_by
+
+    objectives_ = result.objectives
+    if len(objectives_) < 2:
+        raise UserError("chart: a front chart needs two objectives or more")
+    x, y = objectives_[0].name, objectives_[1].name
+    code, reasons = classify(ds, where)
+    dims = list(ds["status"].dims)
+
+    def shown(name):
+        var = ds[name].broadcast_like(ds["status"]).transpose(*dims)
+        return np.asarray(_shown(var, degrees, ds), dtype=float).ravel()
+
+    xs, ys = shown(x), shown(y)
+    code = code.ravel()
+    fig = Figure(figsize=(7.5, 5.6), layout="constrained")
+    ax = fig.add_subplot()
+    finite = np.isfinite(xs) & np.isfinite(ys)
+    for k, reason in enumerate(reasons):
+        mask = finite & (code == k)
+        if not mask.any():
+            continue
+        if k == 0:
+            ax.plot(xs[mask], ys[mask], ".", ms=3, color="#9ecae1", rasterized=True,
+                    label=f"feasible ({mask.sum():,})", zorder=2)
+        else:
+            ax.plot(xs[mask], ys[mask], ".", ms=3, rasterized=True, zorder=1,
+                    color=BLANK_GREYS[(k - 1) % len(BLANK_GREYS)],
+                    label=f"{reason.replace('_', ' ')} ({mask.sum():,})")
+    front_ds = result.designs
+    fx = np.asarray(_shown(front_ds[x], degrees, ds), dtype=float)
+    fy = np.asarray(_shown(front_ds[y], degrees, ds), dtype=float)
+    if len(objectives_) > 2:
+        z = objectives_[2].name
+        marks = ax.scatter(fx, fy, c=np.asarray(_shown(front_ds[z], degrees, ds), float),
+                           s=22, zorder=4, cmap="viridis", label="front")
+        fig.colorbar(marks, ax=ax, label=_label(ds, z, degrees))
+        ax.plot(fx, fy, "-", color="#08306b", lw=0.8, zorder=3)
+    else:
+        ax.plot(fx, fy, "o-", color="#08306b", ms=4, lw=1.2, zorder=4,
+                label=f"front ({len(fx):,})")
+    ax.plot(fx[result.picked], fy[result.picked], "*", ms=13, color="#d62728", zorder=5,
+            markeredgecolor="k", label=f"picked ({result.rule})")
+    feasible = finite & (code == 0)
+    for axis, values in ((ax.set_xlim, xs[feasible]), (ax.set_ylim, ys[feasible])):
+        lo, hi = float(values.min()), float(values.max())  # the feasible designs, padded:
+        pad = 0.05 * (hi - lo) if hi > lo else 0.05 * max(abs(hi), 1.0)  # not the rest
+        axis(lo - pad, hi + pad)
+    ax.set_xlabel(_label(ds, x, degrees) + f"  ({objectives_[0].sense})")
+    ax.set_ylabel(_label(ds, y, degrees) + f"  ({objectives_[1].sense})")
+    ax.legend(loc="best", fontsize=8)
+    title = ds.attrs.get("title", "")
+    ax.set_title((f"Pareto front: {title}" if title else "Pareto front") + f"\n{made_by()}",
+                 fontsize=9)
+    return fig
+
+
+def describe(result: Front, degrees: bool = False) -> list[tuple[str, str, str, str]]:
+    """The picked design's every variable as (name, value, units, long name) rows."""
+    from sweep.selection import flag_names
+
+    design = result.picked_design
+    rows = []
+    for name in list(design.coords) + list(design.data_vars):
+        var = design[name]
+        if var.ndim:
+            continue  # a profile: in the netCDF selection
+        value = var.values.item()
+        names = flag_names(var)
+        units = var.attrs.get("units", "")
+        if names is not None:
+            text = names.get(int(value), str(value))
+        elif isinstance(value, (bytes, str)):
+            text = value.decode() if isinstance(value, bytes) else value
+        elif isinstance(value, float) and math.isnan(value):
+            text = "-"
+        else:
+            if degrees and units == "rad":
+                value, units = math.degrees(value), "deg"
+            text = f"{value:.10g}"
+        rows.append((str(name), text, "" if units == "1" else units,
+                     var.attrs.get("long_name", "")))
+    return rows
