@@ -121,7 +121,8 @@ DECLARATION = Mechanism(
         Output("lambda0", "1", "base ratio l0/l1 (lambda0)", "λ0", echoes="lambda0"),
         Output("lambda2", "1", "connecting rod ratio l2/l1 (lambda2)", "λ2", echoes="lambda2"),
         Output("lambda3", "1", "rocker ratio l3/l1 (lambda3)", "λ3", echoes="lambda3"),
-        Output("gamma", "1", "node parameter sqrt(lambda0 lambda2 / lambda3) (gamma)", "γ"),
+        Output("gamma", "1", "node parameter sqrt(lambda0 lambda2 / lambda3) (gamma)", "γ",
+               everywhere=True),
         Output("restitution_kinematic", "1", "kinematic restitution coefficient (Rk)", "Rk",
                "u31 after / u31 before the special position; negative for an impact "
                "mechanism"),
@@ -134,7 +135,8 @@ DECLARATION = Mechanism(
         Output("impact_speed", "m s-1", "rocker tip speed at impact "
                "(|u31| |omega1| lambda3 l1)"),
         Output("crank_turns_fully", "1", "whether the crank can turn fully",
-               flags={"undetermined": -1, "no": 0, "yes": 1}, undetermined="undetermined"),
+               flags={"undetermined": -1, "no": 0, "yes": 1}, undetermined="undetermined",
+               everywhere=True),
         Output("transmission_angle_working", "rad", "smallest transmission angle over the "
                "working stroke: the crank turn outside method.working_window around the "
                "special position, the dead centre opposite it included", "μ_work",
@@ -148,7 +150,7 @@ DECLARATION = Mechanism(
         Output("assembly_branch", "1", "assembly branch used (sigma)", "σ",
                flags=BRANCH_FLAGS, undetermined="undetermined"),
         Output("special_crank_angle", "rad", "crank angle of the impact special position "
-               "(phi1*)", "φ1*"),
+               "(phi1*)", "φ1*", everywhere=True),
         Output("envelope", "m", "overall size: the length of the largest link", "L_max",
                echoes="envelope"),
         Output("crank_length", "m", "crank length (l1), given or derived from envelope",
@@ -163,10 +165,13 @@ DECLARATION = Mechanism(
         Output("special_position_count", "1", "number of special positions per crank "
                "turn", diagnostic=True, count=True),
         Output("restitution_kinematic_max", "1", "largest |Rk| reachable with this rocker "
-               "ratio (type b only)"),
+               "ratio (type b only)", everywhere=True),
     ),
     status=("ok", "not_assemblable", "no_real_synthesis", "wrong_branch", "nonfinite",
             "degenerate", "no_impact", "second_special_position", "no_special_position"),
+    # at gamma itself (within geometry_tol) the linkage has a second change point, and the
+    # values at the impact's are the ok side's limits: design values, flagged
+    usable=("second_special_position",),
     method=(
         geometry_tol("the full-turn test"),
         Quantity("working_window", "rad", "half-width of the window around the special "
@@ -177,7 +182,9 @@ DECLARATION = Mechanism(
     boundaries=(
         *(Boundary(frozenset(sides), "types a and c: the largest link reaches gamma = "
                    "(1+R)/(1-R), below which the synthesized linkage cannot close; at gamma "
-                   "itself it has a second change point (flagged within geometry_tol)",
+                   "itself it has a second change point, flagged where its identity holds to "
+                   "geometry_tol times the link sum: |L/gamma - 1| <= geometry_tol "
+                   "(gamma + 1)^2/(2 gamma)",
                    indicator="gamma")
           for sides in (("ok", "not_assemblable"), ("not_assemblable", "second_special_position"),
                         ("second_special_position", "ok"))),

@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable
 
+import numpy as np
+
 from kernels.status import CODES
 
 
@@ -97,6 +99,11 @@ class Output:
     designer reads the output against (K = 1, where a balancer stops helping).
     ``diagnostic``: the output describes the computation (steps, harmonics, an error
     estimate), so a jump in it across a boundary says nothing about the design.
+    ``everywhere``: a value of the inputs alone or of the whole computation (the synthesized
+    proportions, a threshold, a classification, a count over starts), kept at every status.
+    Every other output is a design value only where the status is usable (``ok`` or one of
+    the mechanism's ``usable``) and NaN elsewhere (``Mechanism.values_by_status``);
+    diagnostics and echoes count as everywhere.
     """
 
     name: str
@@ -109,6 +116,7 @@ class Output:
     echoes: str | None = None
     marks: tuple = ()
     diagnostic: bool = False  # a count or estimate of the computation, not a design value
+    everywhere: bool = False
     #: computed only when a spec lists it in ``outputs`` (it costs work the others do not)
     on_request: bool = False
     #: a whole-number count: a chart draws it as categories where it takes few values
@@ -120,6 +128,11 @@ class Output:
     @property
     def is_flag(self) -> bool:
         return self.flags is not None
+
+    @property
+    def at_every_status(self) -> bool:
+        """Kept at every status (see ``everywhere``), not only at the usable ones."""
+        return self.everywhere or self.diagnostic or self.echoes is not None
 
     def flag_code_of_nan(self) -> int:
         return int(self.flags[self.undetermined])
@@ -250,6 +263,21 @@ class Mechanism:
     @cached_property
     def method_type(self):
         return namedtuple("Method", [m.name for m in self.method] + ["outputs"])
+
+    @cached_property
+    def usable_codes(self) -> np.ndarray:
+        """Status codes whose points carry design values: ``ok`` and ``usable``."""
+        return np.array([CODES[s] for s in ("ok",) + tuple(self.usable)], dtype=np.int8)
+
+    def values_by_status(self, out: np.ndarray, status: np.ndarray) -> np.ndarray:
+        """The one rule of what a status carries, applied to a kernel's (n_outputs, n)
+        output matrix in place: outputs that are design values (not ``at_every_status``)
+        become NaN wherever the status is not usable. Returns ``out``."""
+        unusable = ~np.isin(status, self.usable_codes)
+        if unusable.any():
+            rows = [i for i, o in enumerate(self.outputs) if not o.at_every_status]
+            out[np.ix_(rows, np.flatnonzero(unusable))] = np.nan
+        return out
 
     @property
     def default_outputs(self) -> tuple[str, ...]:

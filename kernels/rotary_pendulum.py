@@ -63,6 +63,7 @@ def _rules(given: dict) -> str | None:
 #: outputs that need the tangent of the steady cycle, and the ones that need several starts
 STABILITY_OUTPUTS = ("multiplier_modulus", "multiplier_angle", "stability_margin")
 ATTRACTOR_OUTPUTS = ("attractor_count", "basin_fraction")
+MARGIN_OUTPUTS = ("impact_speed_min_ratio", "edge_margin")
 
 
 DECLARATION = Mechanism(
@@ -126,7 +127,7 @@ DECLARATION = Mechanism(
     outputs=(
         Output("regime", "1", "steady regime of the impact motion",
                flags={name: code for code, name in enumerate(REGIMES)}
-               | {"undetermined": -1}, undetermined="undetermined"),
+               | {"undetermined": -1}, undetermined="undetermined", everywhere=True),
         Output("amplitude", "rad", "amplitude of the relative swing (A)", "A"),
         Output("frequency_ratio", "1", "frequency coefficient n (psi ~ A sin(n omega1 t)), "
                "pi over the flight time; NaN on the lab blade, where flights end on the "
@@ -147,7 +148,7 @@ DECLARATION = Mechanism(
                "pendulum in steady state", "|ψ''|max"),
         Output("restitution_critical", "1", "largest R with a periodic impact regime "
                "(R_crit, closed-form models on the rotor stop); NaN if none exists or none "
-               "is known", "R_crit"),
+               "is known", "R_crit", everywhere=True),
         Output("rotor_speed_ratio", "1", "mean rotor speed over the steady cycle over "
                "omega1 (1 at constant rotor speed)"),
         Output("n_steps", "1", "integration steps, accepted and rejected (0: closed form on "
@@ -159,7 +160,8 @@ DECLARATION = Mechanism(
         Output("n_events", "1", "impact events located by the integrator", diagnostic=True,
                count=True),
         Output("method_used", "1", "method that produced the values",
-               flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5}),
+               flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5},
+               everywhere=True),
         Output("multiplier_modulus", "1", "largest modulus |mu| of the multipliers of the "
                "steady cycle's impact map (of its n-fold map for period_n; exact symmetries "
                "removed): below 1 the pattern is stable; R on the rotor stop at constant rotor "
@@ -181,17 +183,19 @@ DECLARATION = Mechanism(
         Output("attractor_count", "1", "distinct steady states reached from method.starts "
                "starting states (rest, then a Halton sequence of arrival states): regime, "
                "period and section state equal to 1e-6; each non-periodic outcome counts "
-               "as one", on_request=True, count=True),
+               "as one", on_request=True, count=True, everywhere=True),
         Output("basin_fraction", "1", "share of the starts that reach the steady state "
                "reported (the one reached from rest, the machine's start-up)",
-               on_request=True),
+               on_request=True, everywhere=True),
         Output("error_estimate", "1", "auto: estimated relative error of the steady cycle's "
                "values (the largest over amplitude, frequency ratio, period, impact speed "
-               "and interval, acceleration peak, rotor speed ratio, and the leading multiplier "
-               "where asked for), from two DOPRI5 solves "
-               "8 times apart in rtol; 0 by a closed form (on the blade: exact flights, the "
-               "cycle repeating to 1e-9); inf where the two solves reach "
-               "different regimes; NaN with a fixed integrator or without a cycle",
+               "and interval, acceleration peak, rotor speed ratio, and where asked for the "
+               "leading multiplier, impact_speed_min_ratio and edge_margin), from two "
+               "DOPRI5 solves 8 times apart in rtol; 0 by the rotor stop's closed form "
+               "(exact to round-off); on the blade's exact flights (auto, closed_form) the "
+               "tolerance the cycle's section states repeat to (1e-9 at tol >= 1e-9); inf "
+               "where the two solves reach different regimes; NaN with a fixed integrator "
+               "or without a cycle",
                diagnostic=True),
         Output("blow_energy", "J", "energy per blow: striker_mass times the steady impact "
                "speed squared, over 2", "E_blow", on_request=True),
@@ -200,7 +204,6 @@ DECLARATION = Mechanism(
     ),
     status=("ok", "escape", "no_impact", "not_periodic", "separatrix", "max_steps",
             "step_underflow", "degenerate", "nonfinite"),
-    usable=("escape",),
     method=(
         Quantity("integrator", "1", "auto (the closed form where the model has one: the "
                  "paper and rigid models on the rotor stop, the rigid model's flights on the "
@@ -358,16 +361,23 @@ def solve_system(block, sub, method_code, rtol, atol, dt, max_impacts, starts=1)
     return out
 
 
-def estimated_error(coarse, fine):
+def estimated_error(coarse, fine, margins=False):
     """Relative difference of the cycle's values of two solves over the finer one's error
     ratio: the estimated relative error of the finer solve; inf where the two disagree on
     the outcome, the period or the chatter; NaN where neither has a cycle. The leading
     multiplier (where asked for) counts on the unit circle's scale, |dmu|/max(1, |mu|): it
     may be 0, and a sensitive blade design's multiplier was 1.3e-5 off at tol 1e-8 while
-    the other values met it."""
+    the other values met it. With ``margins`` (asked for) the slowest-over-fastest impact
+    ratio and the edge distance count too, on the scale of 1 (a ratio; radians): an edge
+    distance was 1.6e-7 off at tol 1e-8 after a flight of ten rotor turns, where the values
+    above met tol."""
     values = [np.abs(coarse[:, j] - fine[:, j]) / np.abs(fine[:, j]) for j in ESTIMATED]
     mu = [rows[:, ROW.modulus] * np.exp(1j * rows[:, ROW.angle]) for rows in (coarse, fine)]
     values.append(np.abs(mu[0] - mu[1]) / np.maximum(1.0, np.abs(mu[1])))
+    if margins:
+        for j in (ROW.speed_ratio, ROW.edge):
+            values.append(np.abs(coarse[:, j] - fine[:, j])
+                          / np.maximum(1.0, np.abs(fine[:, j])))
     with np.errstate(invalid="ignore"):
         diff = np.nanmax(np.where(np.isnan(values), -np.inf, values), axis=0)
     error = diff / (AUTO_REFINE - 1.0)
@@ -378,10 +388,11 @@ def estimated_error(coarse, fine):
     return np.where(same & (fine[:, ROW.outcome] != SEQUENCE_CYCLE), np.nan, error)
 
 
-def solve_auto(block, sub, tol, max_impacts, starts=1):
+def solve_auto(block, sub, tol, max_impacts, starts=1, margins=False):
     """auto on a system without a closed form: DOPRI5 at AUTO_COARSE times the calibrated
     rtol and AUTO_REFINE times finer, refined further where the estimate exceeds
-    AUTO_ACCEPT tol. Counters add up every solve."""
+    AUTO_ACCEPT tol (``margins``: the cycle's margins asked for count in it). Counters add
+    up every solve."""
     rtol = AUTO_COARSE * auto_rtol(tol)
     coarse = solve_system(block, sub, METHOD_DOPRI5, rtol, rtol * AUTO_ATOL_PER_RTOL, 0.0,
                           max_impacts, starts)
@@ -391,7 +402,7 @@ def solve_auto(block, sub, tol, max_impacts, starts=1):
         rtol /= AUTO_REFINE
         fine = solve_system(block, sub[pending], METHOD_DOPRI5, max(rtol, 1e-14),
                             max(rtol, 1e-14) * AUTO_ATOL_PER_RTOL, 0.0, max_impacts, starts)
-        error = estimated_error(coarse, fine)
+        error = estimated_error(coarse, fine, margins)
         counters = [ROW.steps, ROW.rejected, ROW.events]
         fine[:, counters] += rows[np.ix_(pending, counters)]
         fine[:, ROW.error] = error
@@ -444,11 +455,15 @@ def solve_exact(block, sub, tol, max_impacts, starts=1):
     return solve_system(block, sub, METHOD_EXACT, *exact_settings(tol), max_impacts, starts)
 
 
-def closed_form_estimate(rows, integrator):
-    """The error_estimate of rows solved in closed form: 0 where there is a cycle with
-    auto (no integration error to estimate), NaN elsewhere and with a fixed integrator."""
+def closed_form_estimate(rows, integrator, repeat=0.0):
+    """The error_estimate of rows solved in closed form: where there is a cycle, the
+    relative error the solve allows: 0 for the rotor stop's closed form (its values are
+    exact to round-off), the section repeat tolerance ``repeat`` for exact flights (their
+    cycle is accepted when its section states repeat to it, the values' only error left);
+    NaN elsewhere and with a fixed integrator."""
     cycle = rows[:, ROW.outcome] == SEQUENCE_CYCLE
-    return np.where(cycle, 0.0 if integrator == INTEGRATOR_AUTO else np.nan, np.nan)
+    return np.where(cycle, repeat if integrator in (INTEGRATOR_AUTO, INTEGRATOR_CLOSED)
+                    else np.nan, np.nan)
 
 
 def driven_stop_margins(cases, rows, starts):
@@ -492,7 +507,7 @@ def solve_cases(cases, method, stability=False, starts=1):
         rows[closed] = rows_closed
     integrated = ~closed
     if integrated.any():
-        from kernels.pendulum.systems import SYSTEMS, TANGENT_SYSTEMS
+        from kernels.pendulum.systems import SYSTEMS, TANGENT_SYSTEMS, section_repeat_tol
 
         rk4 = method.integrator == INTEGRATOR_RK4
         for (m, t), block in SYSTEMS.items():
@@ -509,9 +524,12 @@ def solve_cases(cases, method, stability=False, starts=1):
                 or method.integrator == INTEGRATOR_AUTO and not stability)
             if exact:
                 out = solve_exact(block, sub, method.tol, method.max_impacts, starts)
-                out[:, ROW.error] = closed_form_estimate(out, method.integrator)
+                out[:, ROW.error] = closed_form_estimate(
+                    out, method.integrator,
+                    section_repeat_tol(METHOD_EXACT, exact_settings(method.tol)[0]))
             elif method.integrator == INTEGRATOR_AUTO:
-                out = solve_auto(block, sub, method.tol, method.max_impacts, starts)
+                out = solve_auto(block, sub, method.tol, method.max_impacts, starts,
+                                 bool(set(method.outputs) & set(MARGIN_OUTPUTS)))
             else:
                 out = solve_system(block, sub, METHOD_RK4 if rk4 else METHOD_DOPRI5,
                                    method.rtol, method.atol, method.dt, method.max_impacts,
@@ -604,5 +622,7 @@ def run(params, method):
     out[np.ix_(cycle_values, ~cycle)] = np.nan
     # a steady cycle whose values did not come out finite is not a design value
     values = out[[O.amplitude, O.impact_speed, O.impact_interval, O.acceleration_peak]]
-    status[cycle & ~np.all(np.isfinite(values), axis=0)] = S.nonfinite
+    broken = cycle & ~np.all(np.isfinite(values), axis=0)
+    status[broken] = S.nonfinite
+    out[O.regime, broken] = np.nan  # nor is its regime known
     return out, status, np.empty((0, params.shape[1], 0))

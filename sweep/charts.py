@@ -78,6 +78,14 @@ def _declared(ds: xr.Dataset, name: str):
         return None
 
 
+def _undetermined_code(var: xr.DataArray):
+    """The code of a flag variable's ``undetermined`` meaning (no value), or None."""
+    meanings = var.attrs.get("flag_meanings", "").split()
+    if "undetermined" not in meanings:
+        return None
+    return int(np.atleast_1d(var.attrs["flag_values"])[meanings.index("undetermined")])
+
+
 def _chart_units(ds: xr.Dataset, name: str) -> tuple[str, float] | None:
     """(units, factor) a chart shows a variable in instead of its own, if declared."""
     output = _declared(ds, name)
@@ -246,12 +254,16 @@ def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = Tr
     status_names = flag_names(status)
     is_flag = "flag_meanings" in var.attrs
     is_count = not is_flag and _is_count(ds, color)
-    usable = usable_mask(ds).values if ok_only else np.ones(var.shape, bool)
+    declared = _declared(ds, color)
+    # status, and an output that exists at every status (a regime, a threshold), is drawn
+    # wherever it has a value; a design value only where the status is usable
+    everywhere = color == "status" or (declared is not None and declared.at_every_status)
+    usable = (usable_mask(ds).values if ok_only and not everywhere
+              else np.ones(var.shape, bool))
     if is_flag or is_count:
         if is_flag:
             names = flag_names(var)
-            # status is drawn everywhere; another flag where the design has values
-            has_value = np.ones(var.shape, bool) if color == "status" else usable
+            has_value = usable & (np.asarray(var.values) != _undetermined_code(var))
             present = sorted(int(c) for c in np.unique(np.asarray(var.values)[has_value])
                              if int(c) in names)
             colour_of = {c: category_colour(c, names) for c in present}

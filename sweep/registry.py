@@ -4,7 +4,9 @@ module.
 A kernel module declares ``DECLARATION`` (a ``kernels.declaration.Mechanism``: parameters,
 outputs, method keys, status flags) and an entry point ``run(params, method)`` returning
 (outputs[n_outputs, n], status[n], profiles[n_profiles, n, n_angles]). Modules are imported
-when first asked for, so a run imports (and numba compiles) only the kernels it uses.
+when first asked for, so a run imports (and numba compiles) only the kernels it uses. The
+entry point is wrapped in the declaration's one rule of what a status carries
+(``Mechanism.values_by_status``), so no caller sees a design value at an unusable status.
 Adding a mechanism is one kernel module and one line here (docs/architecture.md).
 """
 
@@ -40,7 +42,15 @@ def get(name: str) -> Kernel:
     declaration = module.DECLARATION
     if declaration.name != name:
         raise RuntimeError(f"{MECHANISMS[name]} declares {declaration.name!r}, not {name!r}")
-    return Kernel(declaration, module.run)
+    return Kernel(declaration, _by_status(declaration, module.run))
+
+
+def _by_status(declaration: Mechanism, run: Callable) -> Callable:
+    def run_by_status(params, method):
+        out, status, profiles = run(params, method)
+        return declaration.values_by_status(out, status), status, profiles
+    run_by_status.__doc__ = run.__doc__
+    return run_by_status
 
 
 def names() -> list[str]:

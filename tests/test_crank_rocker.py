@@ -229,7 +229,7 @@ def test_H1_kernel_gives_one_sided_values_where_u31_is_0_over_0():
 
 def test_H6_wrong_assembly_mode_is_flagged_with_its_true_rk():
     curve2 = dict(type="general", lambda0=2.0, lambda2=3.0, lambda3=4.0)
-    out, status = crank_rocker_point(sigma=-1, omega1=30.0, **curve2)
+    out, status = crank_rocker_point(sigma=-1, omega1=30.0, raw=True, **curve2)
     assert status == "wrong_branch"
     g = math.sqrt(2.0 * 3.0 / 4.0)
     assert out["restitution_kinematic"] == pytest.approx((1 + g) / (1 - g), rel=1e-12)
@@ -274,10 +274,12 @@ def test_H10_double_change_point_is_detected():
 
 
 def test_general_four_bar_without_change_point_and_double_crank():
-    out, status = crank_rocker_point(type="general", lambda0=3.0, lambda2=3.6, lambda3=2.2)
+    out, status = crank_rocker_point(type="general", lambda0=3.0, lambda2=3.6, lambda3=2.2,
+                                     raw=True)  # not an impact linkage: no design values
     assert status == "no_special_position"
     assert out["crank_turns_fully"] == 1.0 and out["transmission_angle_working"] > 0.3
-    out, status = crank_rocker_point(type="general", lambda0=0.7, lambda2=1.6, lambda3=1.3)
+    out, status = crank_rocker_point(type="general", lambda0=0.7, lambda2=1.6, lambda3=1.3,
+                                     raw=True)  # the kernel's value; no design value
     assert status == "no_impact"  # [SIX] stage 1: gamma < 1, link 3 keeps turning
     assert 0 < out["restitution_kinematic"] < 1
 

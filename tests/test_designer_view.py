@@ -145,7 +145,7 @@ def test_blank_cells_name_their_status_and_usable_results_are_not_blank(tmp_path
     labels = [label for label in drawn.legend if label.startswith("no impact_speed value")]
     assert sorted(labels) == sorted(f"no impact_speed value: {m} ({n:,} points)"
                                     for m, n in expected.items())
-    # escape is a usable status: its regime is charted as a category, not blanked
+    # the regime exists at every status: escape is charted as a category, not blanked
     drawn = design_chart(ds, "k", "R", "regime", tmp_path / "r.png", at={"omega1": (20.0, "")})
     assert "escape" in drawn.legend and not any(s.startswith("no ") for s in drawn.legend)
 

