@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks.timing import paired_times  # noqa: E402
 from benchmarks.timing import best_time  # noqa: E402
 from kernels import kinetostatics as kt  # noqa: E402
+from kernels.extrema import cell_midpoints  # noqa: E402
 
 POINTS, ANGLES = 2000, 360
 SNAP = 1e-9
@@ -88,7 +89,7 @@ def numpy_joint_forces(phi1, pr):
 
 def main():
     pr = make_params(POINTS)
-    angles = kt.profile_angles(ANGLES)
+    angles = cell_midpoints(ANGLES, 2 * np.pi)
     method = kt.DECLARATION.method_record(geometry_tol=SNAP, special_window=0.01,
                                           quadrature_points=2, peak_samples=3,
                                           profile_points=ANGLES)

@@ -117,3 +117,9 @@ def peak_search(f):
         return best
 
     return golden_max, refine_sampled_max
+
+
+def cell_midpoints(n, period):
+    """n profile angles: the midpoints of n equal cells of one cycle [0, period) (empty for
+    n = 0), the profile coordinate of every mechanism that has profiles."""
+    return period * (np.arange(n) + 0.5) / n if n > 0 else np.empty(0)

@@ -23,7 +23,7 @@ from kernels import KERNEL_OPTIONS
 from kernels.crank_rocker import impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol)
-from kernels.extrema import CLUSTER, clustered_points, peak_search
+from kernels.extrema import CLUSTER, cell_midpoints, clustered_points, peak_search
 from kernels.fourbar import (
     CHANGE_POINT_A,
     CHANGE_POINT_B,
@@ -177,7 +177,7 @@ DECLARATION = Mechanism(
                "work)", "M_b"),
     ),
     profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1), from A->D", "φ1"),
-    profile_coordinate=lambda method: profile_angles(method.profile_points),
+    profile_coordinate=lambda method: cell_midpoints(method.profile_points, 2.0 * np.pi),
     status=("ok", "not_assemblable", "special_position", "nonfinite", "degenerate",
             "second_special_position", "no_special_position"),
     usable=("special_position", "second_special_position"),
@@ -558,15 +558,10 @@ def linkage_forces_block(params, tol, window, gl_x, gl_w, n_peak, prof_angles, o
                 prof[k, i, j] = prof_i[k, j]
 
 
-def profile_angles(n):
-    """The crank_angle coordinate of profiles: cell midpoints of [0, 2 pi)."""
-    return 2.0 * np.pi * (np.arange(n) + 0.5) / n if n > 0 else np.empty(0)
-
-
 def run(params, method):
     """Entry point: (outputs, status, profiles[n_profiles, n, n_angles])."""
     gl_x, gl_w = np.polynomial.legendre.leggauss(method.quadrature_points)
-    angles = profile_angles(method.profile_points)
+    angles = cell_midpoints(method.profile_points, 2.0 * np.pi)
     n = params.shape[1]
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)

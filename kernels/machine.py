@@ -28,18 +28,19 @@ revolutions first (the run-up; a motor that cannot start the machine stalls).
 import cmath
 import math
 from collections import namedtuple
+from dataclasses import replace
 
 import numpy as np
 from numba import njit
 
 from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels import kinetostatics as _ks
-from kernels.crank_rocker import (ROOT_LARGER_BASE, ROOT_SMALLER_BASE, TYPE_A, TYPE_B, TYPE_C,
-                                  TYPE_GENERAL)
+from kernels.crank_rocker import DECLARATION as _CR
+from kernels.crank_rocker import _TYPES, ROOT_LARGER_BASE, ROOT_SMALLER_BASE, TYPE_GENERAL
 from kernels.crank_rocker import S as LINKAGE
 from kernels.crank_rocker import _point as linkage_point
 from kernels.declaration import POSITIVE, Mechanism, Output, Quantity, geometry_tol
-from kernels.extrema import CLUSTER, clustered_points, peak_search
+from kernels.extrema import CLUSTER, cell_midpoints, clustered_points, peak_search
 from kernels.fourbar import CHANGE_POINT_C, closure_vectors
 from kernels.impact import System
 from kernels.impact.flight import make_flight, make_timed_flight
@@ -57,11 +58,11 @@ FOR_DELTA = -1.0  # flywheel_inertia = "for_delta_target": sized for method.delt
 # defaults: the test machine (docs/machine.md §3): [CR] Table 1 at lambda2 = 2.5, type a,
 # R = 0.3, crank 0.1 m, tilt 25 degrees, the kinetostatic test mechanism's links
 _NONNEG = dict(minimum=0.0)
+LINK_MASSES = ("m1", "m2", "m3", "s1", "s2", "s3", "q1", "q2", "q3", "J1", "J2", "J3")
 _LINEAR = {"motor_law": ("linear",)}
 _WINDOWED = ("outside |phi1 - phi1*| < special_window (the rigid model's reactions grow "
              "like 1/dphi1 at the node); sampled at peak_samples crank angles, the largest "
              "refined by golden section")
-_TYPES = ("a", "b", "c")
 
 FLYWHEEL_OUTPUTS = ("flywheel_for_delta", "flywheel_for_delta_classical")
 
@@ -98,12 +99,9 @@ DECLARATION = Mechanism(
                "largest base' (in Russian), Institute of Machine Science, National Academy "
                "of Sciences of the Kyrgyz Republic",
     parameters=(
-        Quantity("type", "1", "impact four-bar type (a: largest rod, b: largest rocker, "
-                 "c: largest base, general: the three ratios given)", default="a",
-                 choices={"a": TYPE_A, "b": TYPE_B, "c": TYPE_C, "general": TYPE_GENERAL}),
-        Quantity("largest_link", "1", "largest link ratio of the type (lambda2 for a, "
-                 "lambda3 for b, lambda0 for c)", default=2.5, used_when={"type": _TYPES},
-                 **POSITIVE),
+        # the linkage is crank_rocker's: its type and largest link, declared there once
+        _CR.parameter("type"),
+        replace(_CR.parameter("largest_link"), default=2.5),
         Quantity("base_root", "1", "type b: which root of the synthesis quadratic is the "
                  "base", default="smaller",
                  choices={"smaller": ROOT_SMALLER_BASE, "larger": ROOT_LARGER_BASE},
@@ -122,23 +120,8 @@ DECLARATION = Mechanism(
         Quantity("R", "1", "restitution coefficient of the worked material (R): Newton's "
                  "law at the tool", "R", default=0.3, minimum=0.0, maximum=1.0),
         Quantity("crank_length", "m", "crank length (l1)", "l1", default=0.1, **POSITIVE),
-        Quantity("m1", "kg", "crank mass (m1)", "m1", default=2.0, **_NONNEG),
-        Quantity("m2", "kg", "coupler mass (m2)", "m2", default=3.0, **_NONNEG),
-        Quantity("m3", "kg", "rocker mass (m3)", "m3", default=8.0, **_NONNEG),
-        Quantity("s1", "1", "crank centroid along AB, fraction of l1 from A", default=0.5),
-        Quantity("s2", "1", "coupler centroid along BC, fraction of l2 from B",
-                 default=0.48),
-        Quantity("s3", "1", "rocker centroid along DC, fraction of l3 from D",
-                 default=0.11 / (0.1 * 1.470840480274443)),
-        Quantity("q1", "m", "crank centroid offset across the link", default=0.01),
-        Quantity("q2", "m", "coupler centroid offset across the link", default=-0.02),
-        Quantity("q3", "m", "rocker centroid offset across the link", default=0.015),
-        Quantity("J1", "kg m2", "crank centroidal moment of inertia", "J1",
-                 default=2 * 0.1**2 / 12 + 0.001, **_NONNEG),
-        Quantity("J2", "kg m2", "coupler centroidal moment of inertia", "J2",
-                 default=3 * 0.25**2 / 12, **_NONNEG),
-        Quantity("J3", "kg m2", "rocker centroidal moment of inertia", "J3",
-                 default=8 * 0.15**2 / 12 + 0.02, **_NONNEG),
+        # the link masses, centroids and inertias are linkage_forces', declared there once
+        *(_ks.DECLARATION.parameter(name) for name in LINK_MASSES),
         Quantity("flywheel_inertia", "kg m2", "flywheel on the crank shaft (J_f); "
                  "\"for_delta_target\": the flywheel that holds the speed fluctuation at "
                  "method.delta_target (its exact root)", "J_f", default=5.0,
@@ -243,7 +226,7 @@ DECLARATION = Mechanism(
     ),
     profile_dim=Quantity("angle_after_blow", "rad", "crank angle after the blow "
                          "(phi1 - phi1*), over the open cycle", "φ1 - φ1*"),
-    profile_coordinate=lambda method: profile_angles(method.profile_points),
+    profile_coordinate=lambda method: cell_midpoints(method.profile_points, 2.0 * np.pi),
     status=("ok", "not_assemblable", "no_real_synthesis", "degenerate", "no_impact",
             "stalls", "reverses", "singular_inertia", "too_slow", "no_convergence",
             "max_steps", "step_underflow", "nonfinite"),
@@ -1022,15 +1005,10 @@ def machine_block(params, snap, tol, max_revolutions, start_mode, delta, flywhee
                 prof[k, i, j] = prof_i[k, j]
 
 
-def profile_angles(n):
-    """The angle_after_blow coordinate of profiles: cell midpoints of the open cycle."""
-    return 2.0 * np.pi * (np.arange(n) + 0.5) / n if n > 0 else np.empty(0)
-
-
 def run(params, method):
     """Entry point: (outputs, status, profiles[n_profiles, n, n_angles])."""
     n = params.shape[1]
-    angles = profile_angles(method.profile_points)
+    angles = cell_midpoints(method.profile_points, 2.0 * np.pi)
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
     prof = np.empty((len(F), n, angles.shape[0]))

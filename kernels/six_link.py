@@ -23,7 +23,7 @@ from kernels import KERNEL_OPTIONS
 from kernels.crank_rocker import branch_values, impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quantity,
                                  geometry_tol)
-from kernels.extrema import clustered_points, peak_search
+from kernels.extrema import cell_midpoints, clustered_points, peak_search
 from kernels.fourbar import CHANGE_POINT_B, crank_turns_fully, vector_kinematics
 
 DECLARATION = Mechanism(
@@ -100,7 +100,7 @@ DECLARATION = Mechanism(
                      "direction D->E, in [0, 2 pi)", "φ5"),),
     profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1) over the 4 pi cycle",
                          "φ1"),
-    profile_coordinate=lambda method: profile_angles(method.profile_points),
+    profile_coordinate=lambda method: cell_midpoints(method.profile_points, 4.0 * np.pi),
     status=("ok", "not_assemblable", "nonfinite"),
     method=(
         geometry_tol("the link-length conditions"),
@@ -313,14 +313,9 @@ def six_link_block(params, tol, n_samples, prof_angles, out, status, prof):
             prof[ROCKER_ANGLE, i, j] = prof_i[j]
 
 
-def profile_angles(n):
-    """The crank_angle coordinate of profiles: cell midpoints of the 4 pi cycle."""
-    return 4.0 * np.pi * (np.arange(n) + 0.5) / n if n > 0 else np.empty(0)
-
-
 def run(params, method):
     """Entry point: (outputs, status, profiles[1, n, n_angles])."""
-    angles = profile_angles(method.profile_points)
+    angles = cell_midpoints(method.profile_points, 4.0 * np.pi)
     n = params.shape[1]
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)

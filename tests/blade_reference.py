@@ -13,7 +13,8 @@ pressed into the face rides it: on the face beta(psi) = level - t, psi' = -1/h, 
 free G'' stops pressing (found by Brent's method on a 400-point scan) or psi reaches
 -window (off the edge, past the face); a release whose free path turns back into the face
 at third order touches it again at zero speed. A section is a contact after a flight of at least
-0.1 rotor rad. None of the integration core is used.
+0.1 rotor rad. None of the integration core is used (only the
+kernel's Halton points, to start where its starts do).
 """
 
 import math
@@ -21,6 +22,8 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
+
+from kernels.impact.impact_map import radical_inverse  # the kernel's starts, as stated
 
 TWO_PI = 2.0 * math.pi
 SPEED_EPS = 1e-7
@@ -38,15 +41,6 @@ def h(psi, k):
 
 def h_slope(psi, k):
     return k * (1 - k * k) * math.sin(psi) / (k * k + 1 + 2 * k * math.cos(psi)) ** 2
-
-
-def van_der_corput(j, base):
-    x, f = 0.0, 1.0 / base
-    while j:
-        x += (j % base) * f
-        j //= base
-        f /= base
-    return x
 
 
 class Blade:
@@ -214,8 +208,8 @@ class Blade:
         on it at psi = window (2 x3_j - 1), closing at G' = 2 x2_j (Halton points)."""
         psi = dpsi = 0.0
         if j > 0:
-            psi = self.window * (2 * van_der_corput(j, 3) - 1)
-            dpsi = (2 * van_der_corput(j, 2) - 1) / h(psi, self.k)
+            psi = self.window * (2 * radical_inverse(j, 3) - 1)
+            dpsi = (2 * radical_inverse(j, 2) - 1) / h(psi, self.k)
         return self.run(-beta(psi, self.k), np.array([psi, dpsi]), 0.0, 1.0, sections)
 
 

@@ -8,6 +8,7 @@ import pytest
 from kernels import fourbar as fb
 from kernels import kinetostatics as kt
 from kernels.declaration import SIGMA_IMPACT
+from kernels.extrema import cell_midpoints
 
 L1 = 0.1
 LAM0, LAM3 = 2.029159519725557, 1.470840480274443  # T1 lambda2 = 2.5 (type a, R = 0.3)
@@ -265,7 +266,7 @@ def test_peaks_are_windowed_and_flagged_at_a_special_position():
 
 def test_profiles_show_the_spike_and_match_point_values():
     out, status, prof = run_point(BASE, profile_points=720)
-    angles = kt.profile_angles(720)
+    angles = cell_midpoints(720, 2 * np.pi)
     pr = params(**BASE)
     for j in (0, 100, 359, 719):
         r = forces(angles[j], pr)

@@ -10,6 +10,7 @@ import pytest
 
 import sweep
 from kernels import machine as M
+from kernels.extrema import cell_midpoints
 from tests import machine_reference as ref
 from tests.machine_probes import (blow_of, data, node_of, parameters, reduced_at,
                                   section_map)
@@ -281,7 +282,7 @@ def test_M_O15_the_shaft_torque_is_the_linkages_balancing_moment_at_the_actual_m
     prof_n = 24
     out, status, prof = outputs({"profile_points": prof_n})
     assert status == "ok"
-    angles = M.profile_angles(prof_n)
+    angles = cell_midpoints(prof_n, 2 * np.pi)
     st, m, own = data(parameters())
     from kernels import kinetostatics as K
     decl = K.DECLARATION
