@@ -5,6 +5,10 @@ what a new user waits for once; the target is at most 20 s per example.
 
 Run: .venv/bin/python benchmarks/bench_compile.py [--rounds N] [EXAMPLE ...]
      (writes benchmarks/results/compile.json)
+     .venv/bin/python benchmarks/bench_compile.py --against DIR [--rounds N] [EXAMPLE ...]
+     (a redesign's first run against another checkout's tree DIR, e.g. a `git worktree` of
+     the commit before: cold runs of both, interleaved, on the child processes' CPU time;
+     writes benchmarks/results/compile_against.json)
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ import argparse
 import json
 import os
 import platform
+import resource
 import statistics
 import subprocess
 import sys
@@ -24,22 +29,65 @@ HERE = Path(__file__).resolve().parent
 SWEEP = str(Path(sys.executable).with_name("sweep"))
 
 
-def timed_run(spec: Path, cache: Path, out: Path) -> float:
+def timed_run(spec: Path, cache: Path, out: Path, tree: str | None = None,
+              cpu: bool = False) -> float:
+    """Wall seconds of one ``sweep run`` (``cpu``: its CPU seconds, user and system); with
+    ``tree`` the package imported from that checkout instead of this one."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    if tree:
+        env["PYTHONPATH"] = tree
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     started = time.perf_counter()
     subprocess.run([SWEEP, "run", str(spec), "-o", str(out), "-q", "--force"], env=env,
-                   check=True, capture_output=True)
+                   check=True, capture_output=True, cwd=tree)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if cpu:
+        return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return time.perf_counter() - started
+
+
+def example_spec(name: str, folder: Path) -> Path:
+    """The built-in example's spec, written into ``folder``."""
+    spec = folder / "spec.toml"
+    spec.write_text(subprocess.run([SWEEP, "examples", name], check=True,
+                                   capture_output=True, text=True).stdout)
+    return spec
+
+
+def against(names: list[str], tree: str, rounds: int) -> None:
+    """Cold first runs of this tree and of ``tree``, interleaved, in CPU seconds."""
+    path = HERE.joinpath("results", "compile_against.json")
+    result = {"machine": platform.node(), "against": tree, "rounds": rounds, "examples": {}}
+    here = str(HERE.parent)
+    print(f"{'example':26s} {'this CPU s':>10s} {'other CPU s':>11s} {'ratio':>6s}")
+    for name in names:
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = Path(tmp)
+            spec = example_spec(name, tmp)
+            times = {here: [], tree: []}
+            for r in range(rounds):
+                for i, which in enumerate((here, tree) if r % 2 == 0 else (tree, here)):
+                    times[which].append(timed_run(spec, tmp / f"cache{r}{i}", tmp / "a.nc",
+                                                  which, cpu=True))
+        this, other = statistics.median(times[here]), statistics.median(times[tree])
+        result["examples"][name] = {"this_cpu_s": this, "other_cpu_s": other,
+                                    "ratio": this / other}
+        print(f"{name:26s} {this:10.1f} {other:11.1f} {this / other:6.2f}", flush=True)
+    path.write_text(json.dumps(result, indent=2))
 
 
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("examples", nargs="*")
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--against", metavar="DIR",
+                        help="another checkout's tree: compare cold first runs on CPU time")
     args = parser.parse_args()
     names = args.examples or subprocess.run(
         [SWEEP, "examples"], check=True, capture_output=True, text=True).stdout.split("\n")
     names = [line.split()[0] for line in names if line.strip()]
+    if args.against:
+        return against(names, str(Path(args.against).resolve()), args.rounds)
     path = HERE.joinpath("results", "compile.json")
     # examples measured before and not now keep their record
     result = json.loads(path.read_text()) if path.exists() else {}
@@ -48,9 +96,7 @@ def main():
     for name in names:
         with tempfile.TemporaryDirectory() as tmp:
             tmp = Path(tmp)
-            spec = tmp / "spec.toml"
-            spec.write_text(subprocess.run([SWEEP, "examples", name], check=True,
-                                           capture_output=True, text=True).stdout)
+            spec = example_spec(name, tmp)
             cold, warm = [], []
             for r in range(args.rounds):
                 cache = tmp / f"cache{r}"

@@ -42,6 +42,7 @@ sys.path.insert(0, str(ROOT))
 from benchmarks.timing import best_time  # noqa: E402
 from kernels import fourbar as fb  # noqa: E402
 from kernels import rotary_pendulum as kr  # noqa: E402
+from kernels.pendulum import dispatch  # noqa: E402
 from kernels.pendulum.cases import CASE_COLUMNS, ROW  # noqa: E402
 from kernels.crank_rocker import synthesize_largest_rod  # noqa: E402
 
@@ -70,7 +71,7 @@ def pendulum_work_precision(path: Path):
     def solve(integrator, rtol=1e-10, dt=0.002):
         method = kr.DECLARATION.method_record(integrator=integrator, rtol=rtol,
                                               atol=rtol * 1e-2, dt=dt)
-        return kr.solve_cases(cases, method)
+        return dispatch.solve_cases(cases, method)
 
     ref = solve("closed_form")[0, rows]
 

@@ -6,7 +6,8 @@ benchmarks/results/, KEY/PATH the keys (or list indices) down to the value, sepa
 "/", FORMAT a Python format spec (``,.0f``, ``.2f``, ``.3g``; empty: the value as it is).
 ``{{ measured: FILE }}`` gives the day the file was last committed. A token whose file or
 key does not exist stops the build (``mkdocs build --strict`` runs in the tests), so a
-renamed benchmark cannot leave a stale figure behind.
+renamed benchmark cannot leave a stale figure behind. ``{{ pendulum_systems }}`` is the
+table of pendulum systems (kernels/pendulum/table.py), as the kernels declare it.
 """
 
 from __future__ import annotations
@@ -59,6 +60,27 @@ def measured(name: str) -> str:
     return day.strip() or "not committed yet"
 
 
+SYSTEMS_TOKEN = "{{ pendulum_systems }}"
+
+
+def pendulum_systems() -> str:
+    """The table of pendulum systems as a Markdown table, one row a system."""
+    import sys
+
+    root = str(Path(__file__).resolve().parent.parent)
+    if root not in sys.path:
+        sys.path.insert(0, root)
+    from kernels.pendulum.table import PendulumSystem, SYSTEMS, entry_name
+
+    flags = PendulumSystem._fields[2:]
+    lines = ["| model | tool | " + " | ".join(flags) + " | entry point |",
+             "|---" * (len(flags) + 3) + "|"]
+    for s in SYSTEMS:
+        marks = " | ".join("yes" if getattr(s, f) else "" for f in flags)
+        lines.append(f"| {s.model} | {s.tool} | {marks} | `{entry_name(s)}` |")
+    return "\n".join(lines)
+
+
 def render(markdown: str) -> str:
     """Every token of a page replaced by its value."""
     def one(match):
@@ -75,6 +97,8 @@ def render(markdown: str) -> str:
         except (TypeError, ValueError) as err:
             raise PluginError(f"{match.group(0)}: {err}") from None
 
+    if SYSTEMS_TOKEN in markdown:
+        markdown = markdown.replace(SYSTEMS_TOKEN, pendulum_systems())
     return TOKEN.sub(one, markdown)
 
 

@@ -909,7 +909,8 @@ def design(pr, snap, tol, max_revolutions, start_mode, delta, flywheels, peaks, 
     status, m, crank_own = design_data(pr, snap)
     if status != S.ok:
         return status
-    settings = Settings(METHOD_DOPRI5, tol, tol, 0.0, 10 ** 6, 2.0 * math.pi + 1.0)
+    settings = Settings(method=METHOD_DOPRI5, rtol=tol, atol=tol, dt=0.0, max_steps=10 ** 6,
+                        horizon=2.0 * math.pi + 1.0)
     flywheel = pr[P.flywheel_inertia]
     if flywheel == FOR_DELTA:  # the flywheel a delta target asks for: sized first
         flywheel = sized_flywheel(m, crank_own, r, law, settings, max_revolutions,

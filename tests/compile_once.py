@@ -43,6 +43,7 @@ def main(examples):
     import numpy as np
 
     from kernels.pendulum import systems
+    from kernels.pendulum.table import BY_CODES
     from kernels.pendulum.cases import C, N_ROW
     from sweep import engine, spec
 
@@ -54,7 +55,9 @@ def main(examples):
     cases = np.zeros((1, len(C)))
     rows, log = np.empty((1, N_ROW)), np.empty((4, 2))
     # one case, two starts: the plain and the tangent-carrying paths of the driver
-    systems.rigid_on_blade_tangent(cases, 1, 1e-6, 1e-9, 0.01, 5, 2, rows, log)
+    system = BY_CODES[1, 1]  # the rigid model on the blade
+    systems.rigid_on_lab_window_tangent(
+        cases, systems.settings_for(system, 1, 1e-6, 1e-9, 0.01, 5, 2), rows, log)
     print(json.dumps([calls for calls in compiled.values() if len(calls) > 1]))
 
 

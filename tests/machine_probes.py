@@ -58,7 +58,8 @@ def section_map(pr, w_plus, tol):
     """One revolution from w_plus, then the blow: (end, w_minus, w_next, period, angle)."""
     status, m, own = M.design_data(pr, SNAP)
     nd = M.node(m)
-    settings = M.Settings(M.METHOD_DOPRI5, tol, tol, 0.0, 10 ** 6, 2.0 * math.pi + 1.0)
+    settings = M.Settings(method=M.METHOD_DOPRI5, rtol=tol, atol=tol, dt=0.0,
+                          max_steps=10 ** 6, horizon=2.0 * math.pi + 1.0)
     wref = M.constant_speed_guess(nd, pr[M.P.R], int(pr[M.P.impact_law]), m)
     if not wref == wref:
         wref = m[M.M_IDLE]

@@ -1,6 +1,9 @@
-"""SciPy twins of the pendulum systems for the hard-case tests: each model's vector field in
-the kernel's state layout and each tool's event functions, written again with numpy and
-integrated by DOP853 at rtol = atol = 1e-13, independent of the integration core.
+"""SciPy twins of the pendulum systems: each model's vector field in the kernel's state
+layout, the blade's geometry, and each tool's event functions, written again with numpy and
+integrated by DOP853 at rtol = atol = 1e-13, independent of the integration core. The one
+home of the reference systems: the hard-case tests, the model tests
+(tests/test_pendulum_models.py) and the blade twin (tests/blade_reference.py) take their
+vector fields and geometry from here.
 
 State layouts (as in kernels/pendulum/models.py): the paper and rigid models (psi, psi')
 with the rotor angle as the time; the rotor model (phi1, phi1', psi, psi') in time omega1 t.
@@ -14,6 +17,30 @@ from scipy.integrate import solve_ivp
 
 XI = 4.0
 TIGHT = dict(method="DOP853", rtol=1e-13, atol=1e-13)
+
+
+def paper_acceleration(psi, dpsi, k, xi):
+    """psi'' of [RP]'s equation (P1-P2)."""
+    x = k ** 2 + 1 + 2 * k * math.cos(psi)
+    return -k * x / (1 + xi * x) * (dpsi ** 2 + xi) * math.sin(psi)
+
+
+def rigid_acceleration(psi, k, kappa):
+    """psi'' of the rigid pendulum at constant rotor speed (P5)."""
+    return -kappa * k * math.sin(psi)
+
+
+def rotor_mass(psi, xi, kc, j1):
+    """The rotor model's mass matrix on (phi1, psi), lengths in l_cm, inertias in J_c."""
+    c = math.cos(psi)
+    return np.array([[j1 + 1 + xi * (kc * kc + 1 + 2 * kc * c), 1 + xi * (1 + kc * c)],
+                     [1 + xi * (1 + kc * c), 1 + xi]])
+
+
+def rotor_forces(w, psi, dpsi, xi, kc, slope, idle):
+    """The rotor model's generalized forces: the motor law and the velocity terms."""
+    g = xi * kc * math.sin(psi)
+    return np.array([slope * (idle - w) + g * (2 * w * dpsi + dpsi ** 2), -g * w * w])
 
 
 @dataclass
@@ -61,21 +88,16 @@ class Twin:
         return 1.0 if self.driven else y[1]
 
     def mass(self, psi):
-        c, xi, kc = math.cos(psi), self.xi, self.k_cm
-        return np.array([[self.j1 + 1 + xi * (kc * kc + 1 + 2 * kc * c), 1 + xi * (1 + kc * c)],
-                         [1 + xi * (1 + kc * c), 1 + xi]])
+        return rotor_mass(psi, self.xi, self.k_cm, self.j1)
 
     def accelerations(self, y):
         """(phi1'', psi'') of the free motion."""
         if self.model == "paper":
-            psi, dpsi = y
-            x = self.k ** 2 + 1 + 2 * self.k * math.cos(psi)
-            return 0.0, -self.k * x / (1 + self.xi * x) * (dpsi ** 2 + self.xi) * math.sin(psi)
+            return 0.0, paper_acceleration(y[0], y[1], self.k, self.xi)
         if self.model == "rigid":
-            return 0.0, -self.kappa * self.k * math.sin(y[0])
+            return 0.0, rigid_acceleration(y[0], self.k, self.kappa)
         phi1, w, psi, dpsi = y
-        g = self.xi * self.k_cm * math.sin(psi)
-        forces = [self.slope * (self.idle - w) + g * (2 * w * dpsi + dpsi ** 2), -g * w * w]
+        forces = rotor_forces(w, psi, dpsi, self.xi, self.k_cm, self.slope, self.idle)
         return tuple(np.linalg.solve(self.mass(psi), forces))
 
     def rhs(self, t, y):
@@ -97,7 +119,13 @@ def beta(psi, k):
 
 
 def h_ratio(psi, k):
+    """h = dbeta/dpsi: the contact point's polar angle over psi."""
     return (1 + k * math.cos(psi)) / (k * k + 1 + 2 * k * math.cos(psi))
+
+
+def h_slope(psi, k):
+    """dh/dpsi."""
+    return k * (1 - k * k) * math.sin(psi) / (k * k + 1 + 2 * k * math.cos(psi)) ** 2
 
 
 def events(twin, tool, data):
@@ -179,8 +207,7 @@ def _jacobian_rate(twin, tool, y, data):
     if tool != "lab_window":
         return 0.0
     k, psi, dpsi = data[2], twin.psi(y), twin.dpsi(y)
-    slope = k * (1 - k * k) * math.sin(psi) / (k * k + 1 + 2 * k * math.cos(psi)) ** 2
-    return slope * dpsi * dpsi
+    return h_slope(psi, k) * dpsi * dpsi
 
 
 def _bounce_cap(twin, j, y):

@@ -102,8 +102,7 @@ def test_numba_cache_is_keyed_by_each_modules_import_closure(tmp_path):
     import numba
 
     from kernels import cache
-    from kernels import rotary_pendulum as kr
-    from kernels.pendulum import systems
+    from kernels.pendulum import distinct, systems
 
     closure = cache.import_closure(KERNELS / "rotary_pendulum.py")
     names = {str(p.relative_to(KERNELS.parent)) for p in closure}
@@ -133,7 +132,7 @@ def test_numba_cache_is_keyed_by_each_modules_import_closure(tmp_path):
     assert after_core["pendulum/systems.py"] != after_balancer["pendulum/systems.py"]
     assert after_core["balancer.py"] == after_balancer["balancer.py"]
     # and numba uses it for every cached kernel
-    for kernel in (systems.rigid_on_blade, kr.row_hashes):
+    for kernel in (systems.rigid_on_lab_window, distinct.row_hashes):
         locator = kernel._cache._impl._locator
         assert isinstance(locator, cache.ImportClosureLocator)
         assert locator.get_source_stamp() == cache.stamp(kernel.py_func.__code__.co_filename)

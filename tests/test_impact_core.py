@@ -17,8 +17,10 @@ from kernels import INLINE_OPTIONS
 from kernels.impact import System
 from kernels.impact.events import ILLINOIS_ITERATIONS, make_illinois
 from kernels.impact.flight import make_flight, make_timed_flight
-from kernels.impact.impact_map import (aitken, classify_period, fixed_point_jump,
-                                       impacts_past_jump, secant_step)
+from kernels.impact.impact_map import (aitken, aitken_jump, classify_period,
+                                       fixed_point_jump, impacts_past_jump, not_periodic,
+                                       secant_step)
+from kernels.impact.outcomes import SEQUENCE_MAX_STEPS, SEQUENCE_NOT_PERIODIC
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW)
 from kernels.impact.tuples import relative_scales
@@ -295,6 +297,36 @@ def test_period_classification_and_aitken():
     # a geometric sequence x_j = 1 + 0.5^j: Aitken gives its limit from three terms
     assert aitken(2.0, 1.5, 1.25) == pytest.approx(1.0, rel=1e-15)
     assert aitken(1.0, 2.0, 4.0) == 4.0  # diverging: no extrapolation
+
+
+def test_aitken_jump_finds_the_fixed_point_of_a_diagonal_affine_map_from_any_three_rows():
+    """x -> a * (x - x*) + x* on each coordinate (|a| < 0.95): three successive sections at
+    rows last - 2 .. last give x* to round-off, whichever rows they are; a coordinate that
+    does not contract is left at its last value."""
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        fixed, slope = rng.uniform(-3, 3, 2), rng.uniform(-0.9, 0.9, 2)
+        history = np.empty((9, 2))
+        history[0] = rng.uniform(-3, 3, 2)
+        for j in range(1, 9):
+            history[j] = fixed + slope * (history[j - 1] - fixed)
+        last = int(rng.integers(2, 9))
+        np.testing.assert_allclose(aitken_jump(history, last), fixed, rtol=1e-9, atol=1e-9)
+    history = np.array([[1.0, 0.0], [2.0, 0.5], [4.0, 0.75]])  # the first doubles
+    x = aitken_jump(history, 2)
+    assert x[0] == 4.0 and x[1] == pytest.approx(1.0, rel=1e-15)
+
+
+def test_a_budget_without_a_cycle_is_not_periodic_only_where_the_map_stopped_contracting():
+    """not_periodic: a quasi-periodic sequence (a rotation by an irrational angle) keeps its
+    step size: not periodic; a slowly contracting one (steps shrinking by 0.9) is still
+    converging: max_steps; fewer than 20 sections never say not periodic."""
+    angle = 2 * np.pi * (np.sqrt(5) - 1) / 2
+    rotation = np.array([[np.cos(angle * j), np.sin(angle * j)] for j in range(60)])
+    contracting = np.array([[0.9 ** j, 0.0] for j in range(60)])
+    assert not_periodic(rotation, 60) == SEQUENCE_NOT_PERIODIC
+    assert not_periodic(contracting, 60) == SEQUENCE_MAX_STEPS
+    assert not_periodic(rotation, 19) == SEQUENCE_MAX_STEPS
 
 
 def test_the_transient_jump_lands_on_the_fixed_point_of_an_affine_map():

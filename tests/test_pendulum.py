@@ -8,7 +8,7 @@ import pytest
 from scipy.special import ellipk as scipy_ellipk
 
 from kernels import rotary_pendulum as kr
-from kernels.pendulum import models as pm
+from kernels.pendulum import dispatch, models as pm
 from kernels.impact.outcomes import FLIGHT_EVENT
 from sweep import spec
 from sweep.errors import UserError
@@ -237,13 +237,13 @@ def test_P_O13_paper_tables_within_their_bands_and_the_typo_cell():
 
 def test_P_O12_omega1_is_a_time_scale_and_is_not_integrated_again(monkeypatch):
     calls = []
-    real = kr.solve_cases
+    real = dispatch.solve_cases
 
     def counting(cases, method, *more):
         calls.append(cases.shape[0])
         return real(cases, method, *more)
 
-    monkeypatch.setattr(kr, "solve_cases", counting)
+    monkeypatch.setattr(dispatch, "solve_cases", counting)
     s = spec.parse('mechanism = "rotary_pendulum"\n[grid]\nk = [1.5, 2.5]\n'
                    'omega1 = [20.0, 37.7, 100.0]\n[method]\nintegrator = "dopri5"')
     from sweep.engine import Plan, run_block

@@ -12,12 +12,18 @@ from scipy.optimize import brentq
 
 from kernels import rotary_pendulum as kr
 from kernels.impact.impact_map import SPEED_EPS
-from kernels.impact.runge_kutta import METHOD_EXACT
+from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_EXACT
+from kernels.pendulum import distinct
+from kernels.pendulum.accuracy import exact_settings
+from kernels.pendulum.dispatch import USED_CLOSED
 from kernels.pendulum.models import rigid_exact
 from kernels.pendulum.cases import CASE_COLUMNS, N_ROW
-from kernels.pendulum.systems import SYSTEMS
+from kernels.pendulum.systems import ENTRY_POINTS, settings_for
+from kernels.pendulum.table import BY_CODES
 from kernels.pendulum.tools import SECTION_MIN_FLIGHT
 from tests.conftest import kernel_point, kernel_points
+from tests.pendulum_twins import (beta as twin_beta, h_ratio, paper_acceleration,
+                                  rigid_acceleration, rotor_forces, rotor_mass)
 
 XI = 4.0
 REG = kr.R_  # regime codes by name
@@ -45,12 +51,13 @@ def section_log(sections, rtol=1e-11, atol=None, exact_tol=None, **design):
         given["kappa"] = given["xi"] / (1 + given["xi"])
     case = np.array([[CODES[c].encode(given[c]) for c in CASE_COLUMNS]])
     rows, log = np.empty((1, N_ROW)), np.full((sections, 2), np.nan)
-    block = SYSTEMS[(int(case[0, 0]), int(case[0, 5]))]
+    system = BY_CODES[int(case[0, 0]), int(case[0, 5])]
     if exact_tol is not None:
-        block(case, METHOD_EXACT, *kr.exact_settings(exact_tol), sections - 1, 1, rows, log)
+        settings = settings_for(system, METHOD_EXACT, *exact_settings(exact_tol), sections - 1)
     else:
-        block(case, 1, rtol, rtol * 1e-2 if atol is None else atol, 0.002, sections - 1, 1,
-              rows, log)
+        settings = settings_for(system, METHOD_DOPRI5, rtol,
+                                rtol * 1e-2 if atol is None else atol, 0.002, sections - 1)
+    ENTRY_POINTS[system](case, settings, rows, log)
     return log
 
 
@@ -72,15 +79,11 @@ def rotor_flights(k, xi, kappa, r, j1, slope, idle, impacts):
     kc = k * lam  # l1 over the distance to the centre of mass
 
     def mass(psi):
-        c = math.cos(psi)
-        return np.array([[j1 + 1 + xi * (kc * kc + 1 + 2 * kc * c), 1 + xi * (1 + kc * c)],
-                         [1 + xi * (1 + kc * c), 1 + xi]])
+        return rotor_mass(psi, xi, kc, j1)
 
     def rhs(t, y):
         phi1, w, psi, dpsi = y
-        s = xi * kc * math.sin(psi)
-        acc = np.linalg.solve(mass(psi), [slope * (idle - w) + s * (2 * w * dpsi + dpsi ** 2),
-                                          -s * w * w])
+        acc = np.linalg.solve(mass(psi), rotor_forces(w, psi, dpsi, xi, kc, slope, idle))
         return [w, acc[0], dpsi, acc[1]]
 
     def hit(t, y):
@@ -187,7 +190,7 @@ def test_rotor_impacts_to_converge_count_the_sequence_from_rest_not_the_sections
         values = dict(model=2, tool=0, tool_window=0.0, idle_speed=1.0) | {
             name: float(v[j]) for name, v in design.items()}
         case = np.array([values[name] for name in CASE_COLUMNS])
-        impacts, _ = plain(systems._PARAMETERS[2](case), systems.stop_data(case),
+        impacts, _ = plain(systems.PARAMETERS["rotor"](case), systems.rotor_stop_data(case),
                            values["R"], settings, 10 * rtol, 1000)
         assert impacts > 0
         expected.append(impacts)
@@ -264,19 +267,15 @@ class LabReference:
         self.contacts = 0
 
     def acc(self, psi, dpsi):
-        k = self.k
         if self.model == "paper":
-            x = k * k + 1 + 2 * k * math.cos(psi)
-            return -k * x / (1 + self.xi * x) * (dpsi ** 2 + self.xi) * math.sin(psi)
-        return -self.kappa * k * math.sin(psi)
+            return paper_acceleration(psi, dpsi, self.k, self.xi)
+        return rigid_acceleration(psi, self.k, self.kappa)
 
     def beta(self, psi):
-        return math.atan2(math.sin(psi), self.k + math.cos(psi))
+        return twin_beta(psi, self.k)
 
     def h(self, psi):
-        """dbeta/dpsi."""
-        k = self.k
-        return (1 + k * math.cos(psi)) / (k * k + 1 + 2 * k * math.cos(psi))
+        return h_ratio(psi, self.k)
 
     def gap_acc(self, psi, dpsi):
         """G'' of the free motion by central differences of G' along the flow."""
@@ -570,7 +569,7 @@ def test_closed_form_flights_on_the_blade_match_dopri5_at_random_designs():
 
     params = blade_points("rigid", 60, 20261125)
     exact, _ = run(params, "closed_form", tol=1e-9)
-    assert np.all(exact[OUT["method_used"]] == kr.USED_CLOSED)
+    assert np.all(exact[OUT["method_used"]] == USED_CLOSED)
     refs = [run(params, "dopri5", rtol=r, atol_per_rtol=1e-2)[0]
             for r in (1e-10, 1e-11, 1e-12)]
     values = ["impact_speed", "impact_interval", "amplitude", "acceleration_peak"]
@@ -634,7 +633,7 @@ def test_lab_window_through_the_atlas(tmp_path):
     assert ds["impact_interval"].attrs["units"] == "rad"
     speed = ds["impact_speed"].values
     np.testing.assert_allclose(speed[:, 1], 2.0 * speed[:, 0], rtol=1e-12)  # omega1 scale
-    # auto flies the rigid model on the blade in closed form (kr.EXACT_FLIGHTS)
+    # auto flies the rigid model on the blade in closed form (its table row has exact_flow)
     assert ds["method_used"].attrs["flag_meanings"].split()[int(ds["method_used"][0, 0])] \
         == "closed_form"
 
@@ -666,12 +665,12 @@ def test_distinct_rows_equals_the_exact_sort_and_survives_a_hash_collision(monke
     keys = rng.integers(0, 4, size=(500, 10)).astype(float)
     keys[::7, 2] = -0.0  # -0.0 and 0.0 are one case
     keys[::11, 3] = np.nan  # kappa not given: each NaN row is compared by value
-    cases, index = kr.distinct_rows(keys)
+    cases, index = distinct.distinct_rows(keys)
     exact = np.unique(np.where(keys == 0.0, 0.0, keys), axis=0)
     assert len(cases) == len(exact)
     np.testing.assert_array_equal(cases[index], np.where(keys == 0.0, 0.0, keys))
-    monkeypatch.setattr(kr, "row_hashes", lambda k: np.zeros(len(k), dtype=np.uint64))
-    cases, index = kr.distinct_rows(keys)  # every row collides: the exact fallback
+    monkeypatch.setattr(distinct, "row_hashes", lambda k: np.zeros(len(k), dtype=np.uint64))
+    cases, index = distinct.distinct_rows(keys)  # every row collides: the exact fallback
     np.testing.assert_array_equal(cases[index], keys)
 
 
@@ -703,20 +702,16 @@ class RotorLabReference:
         self.kc = k * self.lam
 
     def mass(self, psi):
-        c, xi, kc = math.cos(psi), self.xi, self.kc
-        return np.array([[self.j1 + 1 + xi * (kc * kc + 1 + 2 * kc * c), 1 + xi * (1 + kc * c)],
-                         [1 + xi * (1 + kc * c), 1 + xi]])
+        return rotor_mass(psi, self.xi, self.kc, self.j1)
 
     def forces(self, w, psi, dpsi):
-        g = self.xi * self.kc * math.sin(psi)
-        return np.array([self.s * (self.idle - w) + g * (2 * w * dpsi + dpsi**2), -g * w * w])
+        return rotor_forces(w, psi, dpsi, self.xi, self.kc, self.s, self.idle)
 
     def beta(self, psi):
-        return math.atan2(math.sin(psi), self.k + math.cos(psi))
+        return twin_beta(psi, self.k)
 
     def h(self, psi):
-        k = self.k
-        return (1 + k * math.cos(psi)) / (k * k + 1 + 2 * k * math.cos(psi))
+        return h_ratio(psi, self.k)
 
     def dh(self, psi):
         e = 1e-6
@@ -880,9 +875,6 @@ def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(mo
     from kernels.pendulum import models as pm
     from kernels.pendulum.tools import _swing_coast
 
-    def beta(psi, k):  # the contact point's polar angle ahead of the arm
-        return math.atan2(math.sin(psi), k + math.cos(psi))
-
     m = pm.PAPER if model == "paper" else pm.RIGID
     coast = _swing_coast(m)
 
@@ -912,7 +904,7 @@ def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(mo
         z = solve_ivp(rhs, (0.0, lag), [0.0, v], method="DOP853", rtol=1e-13,
                       atol=1e-14).y[:, -1]
         t = t_cross + lag
-        g = t + beta(z[0], k)
+        g = t + twin_beta(z[0], k)
         # the faces stand at face + 2 pi n; a third of the draws put one just ahead, met
         # within the passage the flight is in (the coast must not skip the rest of it)
         face = g + 1e-3 if j % 3 == 0 else rng.uniform(0.0, 2.0 * math.pi)
@@ -929,13 +921,13 @@ def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(mo
         coasted += 1
 
         def faces(s, w):
-            return math.sin(0.5 * (s + beta(w[0], k) - face))
+            return math.sin(0.5 * (s + twin_beta(w[0], k) - face))
         sol = solve_ivp(rhs, (t, t + skip), z, method="DOP853", rtol=1e-12, atol=1e-13,
                         events=faces)
         assert np.allclose(sol.y[:, -1], z, rtol=0.0, atol=1e-7), (k, c, window, amp)
         met = sol.y_events[0].reshape(-1, 2)
         assert np.all(np.abs(met[:, 0]) > window), (k, c, window, amp)
         passed += len(met)
-        g_end = t + skip + beta(z[0], k)
+        g_end = t + skip + twin_beta(z[0], k)
         assert new[0] <= g_end < new[0] + 2.0 * math.pi and new[1:3] == (window, k)
     assert coasted > 15 and passed > 50

@@ -15,6 +15,7 @@ import pytest
 
 from kernels.pendulum import systems
 from kernels.pendulum.cases import CASE_COLUMNS
+from kernels.pendulum.table import MODELS, TOOLS
 from kernels.rotary_pendulum import DECLARATION as PENDULUM, REGIMES
 from tests import probes
 from tests.conftest import kernel_points
@@ -22,8 +23,6 @@ from tests.conftest import kernel_points
 STABILITY = ("multiplier_modulus", "multiplier_angle", "stability_margin",
              "impact_speed_min_ratio")
 ATTRACTORS = ("attractor_count", "basin_fraction")
-MODEL_CODES = {"paper": 0, "rigid": 1, "rotor": 2}
-TOOL_CODES = {"rotor_stop": 0, "lab_window": 1}
 CHATTER = REGIMES.index("chatter")
 
 
@@ -92,12 +91,12 @@ def section_jacobians(model, tool, design, rtol=1e-12, eps=2e-4, transient=600):
     plain central differences were 1.4e-6 off at eps = 1e-5 on a blade design whose second
     derivatives are ~3e4, and at eps = 1e-6 the map's own rounding (~1e-11) shows."""
     case = np.zeros(len(CASE_COLUMNS))
-    values = dict(model=MODEL_CODES[model], tool=TOOL_CODES[tool], tool_window=0.0,
+    values = dict(model=MODELS[model], tool=TOOLS[tool], tool_window=0.0,
                   rotor_inertia_ratio=100.0, motor_slope=100.0, idle_speed=1.0) | design
     for i, name in enumerate(CASE_COLUMNS):
         case[i] = values[name]
-    params = systems._PARAMETERS[MODEL_CODES[model]](case)
-    data = (systems.stop_data, systems.blade_data)[TOOL_CODES[tool]](case)
+    params = systems.PARAMETERS[model](case)
+    data = systems.DATA[tool](case)
     probe = probes.section_jacobian(model, tool)
     settings = probes.settings(rtol=rtol, atol=rtol * 1e-2)
     r = case[CASE_COLUMNS.index("R")]
@@ -230,12 +229,12 @@ def test_the_jump_to_a_chatters_accumulation_point_is_differentiated(model):
         design = {name: float(v[0]) for name, v in draw(rng, "lab_window", 1).items()}
         design["R"] = rng.uniform(0.05, 0.5)
         case = np.zeros(len(CASE_COLUMNS))
-        values = dict(model=MODEL_CODES[model], tool=1, rotor_inertia_ratio=100.0,
+        values = dict(model=MODELS[model], tool=TOOLS["lab_window"], rotor_inertia_ratio=100.0,
                       motor_slope=100.0, idle_speed=1.0) | design
         for i, name in enumerate(CASE_COLUMNS):
             case[i] = values[name]
-        p = systems._PARAMETERS[MODEL_CODES[model]](case)
-        lower, window, k, level, side = systems.blade_data(case)
+        p = systems.PARAMETERS[model](case)
+        lower, window, k, level, side = systems.lab_window_data(case)
         r = design["R"]
         psi = rng.uniform(-0.8, 0.8) * window
         w = 1.0 if model != "rotor" else rng.uniform(0.8, 1.2)
@@ -281,13 +280,13 @@ def bisect(inside, lo, hi, rounds=40):
 def follow(model, design, rs, transient, steps, rtol=1e-11):
     """tests/probes.follow on the blade: one cycle followed along R."""
     case = np.zeros(len(CASE_COLUMNS))
-    values = dict(model=MODEL_CODES[model], tool=1, rotor_inertia_ratio=100.0,
+    values = dict(model=MODELS[model], tool=TOOLS["lab_window"], rotor_inertia_ratio=100.0,
                   motor_slope=100.0, idle_speed=1.0, R=rs[0]) | design
     for i, name in enumerate(CASE_COLUMNS):
         case[i] = values[name]
-    params = systems._PARAMETERS[values["model"]](case)
+    params = systems.PARAMETERS[model](case)
     return probes.follow(model, "lab_window")(
-        params, systems.blade_data(case), np.asarray(rs, float),
+        params, systems.lab_window_data(case), np.asarray(rs, float),
         probes.settings(rtol=rtol, atol=rtol), transient, steps)
 
 

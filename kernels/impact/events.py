@@ -95,12 +95,10 @@ def make_illinois(f):
     return root
 
 
-def make_locator(values, rates, directions, step):
-    """The event search of a system: ``values``, ``rates``, the ``directions`` tuple and
-    the system's Runge-Kutta step (runge_kutta.make_stepper), for exact values at a grazing
-    extremum. A step is the tuple (t, h, y0, f0, y1, f1); the context (system data, p,
-    method, slack)."""
-    n_events = len(directions)
+def make_event_roots(values, rates, step):
+    """The searches of the locator: ``on_partial_step`` (g of an event on an exact partial
+    step), Illinois on the interpolant and on exact partial steps, and ``extremum`` (where
+    g turns inside an interval, by bisection on the interpolant's g')."""
 
     @njit(**INLINE_OPTIONS)
     def on_interpolant(s, data):
@@ -132,6 +130,19 @@ def make_locator(values, rates, directions, step):
     def extremum(e, lo, hi, up, st, system):
         """Where g_e turns in (lo, hi) (g' from + to - for a maximum)."""
         return turn_on_interpolant((e, st, system), lo, hi, up, BISECTIONS)
+
+    return on_partial_step, root_on_interpolant, root_on_partial_steps, extremum
+
+
+def make_locator(values, rates, directions, step):
+    """The event search of a system: ``values``, ``rates``, the ``directions`` tuple and
+    the system's Runge-Kutta step (runge_kutta.make_stepper), for exact values at a grazing
+    extremum. A step is the tuple (t, h, y0, f0, y1, f1); the context (system data, p,
+    method, slack)."""
+    n_events = len(directions)
+
+    on_partial_step, root_on_interpolant, root_on_partial_steps, extremum = (
+        make_event_roots(values, rates, step))
 
     @njit(**INNER_OPTIONS)
     def first_crossing(e, g, r, st, context):

@@ -56,15 +56,138 @@ def _no_length(y, p, length):
 
 
 def make_flight(system):
-    """The flight loop of a system (see the module docstring)."""
-    rhs, monitor = system.rhs, system.monitor
-    values, rates, on_event, start_gap = (system.event_values, system.event_rates,
-                                          system.on_event, system.start_gap)
-    coast = system.coast
+    """The flight loop of a system (see the module docstring): ``(flight, step)``."""
+    rhs, monitor, on_event = system.rhs, system.monitor, system.on_event
     step = make_stepper(rhs, system.scales, system.exact)
+    locate = make_locator(system.event_values, system.event_rates, system.directions, step)
+    polish = make_polish(system.event_values, system.event_rates, step)
+    turning_angle = make_turning_angle(monitor, step)
+    track_peak, final_peak = make_peak(monitor, step)
+    start_step, next_step, events_at, coast_on = make_step_control(system)
+
+    @njit(**INNER_OPTIONS)
+    def flight(t0, y0, p, data, settings, refine):
+        method, rtol, atol = settings.method, settings.rtol, settings.atol
+        slack = max(100.0 * atol, 1e-10)  # how far beyond a level a step may start (events.py)
+        t, y, f = t0, y0, rhs(y0, p)
+        angle, rate, accel = monitor(t, y, f)
+        h = start_step(t, y, f, data, p, settings, rate)
+        steps = rejected = events = 0
+        amplitude, peak = abs(angle), abs(accel)
+        # with refine, where |accel| is largest: the step, its end state, and a bracket
+        # (from the step's start) around its largest sample, interior or at the end
+        best, best_value = (y, f, y, f, 0.0, t, 0.0, 0.0), abs(accel)
+        after_reject, err_prev = bool(False), 1.0
+        crossings, memo = 0, (math.nan, math.nan)  # zero crossings of the angle, coast's memo
+        # the events' values and rates at the step's start: the last step's end, or anew
+        # where the flight moved otherwise (an event passed, a coast)
+        start = events_at(t, y, f, data)
+        while steps + rejected < settings.max_steps:
+            if t - t0 > settings.horizon:
+                return Flight(FLIGHT_HORIZON, -1, t, y, f, data, amplitude, peak,
+                              Counters(steps, rejected, events))
+            y1, f1, err = step(method, y, f, h, p, rtol, atol)
+            if not err <= 1.0:  # NaN too: a step into a blow-up is rejected, not taken
+                rejected += 1
+                after_reject = bool(True)
+                h, underflow = rejected_step_size(h, err, err_prev, t)
+                if underflow:
+                    return Flight(FLIGHT_UNDERFLOW, -1, t, y, f, data, amplitude, peak,
+                                  Counters(steps, rejected, events))
+                continue
+            steps += 1
+            e, s, end = locate((t, h, y, f, y1, f1), (data, p, method, slack), start)
+            if e >= 0:
+                s, ys, fs = polish(e, (t, h, y, f), s, p, data, settings)
+                events += 1
+                terminal, new_data = on_event(e, t + s, ys, fs, data, p)
+                angle_e, rate_e, accel_e = monitor(t + s, ys, fs)
+                amplitude, peak = max(amplitude, abs(angle_e)), max(peak, abs(accel_e))
+                if terminal:
+                    if refine:  # the largest |accel|, refined by golden section
+                        best, best_value = track_peak(best, best_value, t, h, y, f, y1, f1,
+                                                      s, -1.0)
+                        peak = final_peak(best, peak, t + s, p, method, rtol)
+                    return Flight(FLIGHT_EVENT, e, t + s, ys, fs, new_data, amplitude, peak,
+                                  Counters(steps, rejected, events))
+                # passed (the striker goes by the tool): on from the event, state as it is
+                t, y, f, data, angle = t + s, ys, fs, new_data, angle_e
+                start = events_at(t, y, f, data)
+                continue
+            angle1, rate1, accel1 = monitor(t + h, y1, f1)
+            if not (math.isfinite(angle1) and math.isfinite(rate1)):  # RK4 has no error
+                return Flight(FLIGHT_NONFINITE, -1, t, y, f, data, amplitude, peak,
+                              Counters(steps, rejected, events))
+            amplitude, peak = max(amplitude, abs(angle1)), max(peak, abs(accel1))
+            if refine and (monitor(t, y, f)[1] < 0.0) != (rate1 < 0.0):
+                amplitude = max(amplitude, abs(turning_angle(t, h, y, f, y1, f1, p,
+                                                             settings)))
+            if refine:
+                best, best_value = track_peak(best, best_value, t, h, y, f, y1, f1, h,
+                                              abs(accel1))
+            skip, crossings, data, memo = coast_on(angle, angle1, crossings, t, h, y1, f1,
+                                                   data, p, t0 + settings.horizon, memo)
+            t, y, f, angle = t + skip + h, y1, f1, angle1
+            start = end if skip == 0.0 else events_at(t, y, f, data)
+            h, err_prev = next_step(y, p, settings, h, err, after_reject, err_prev)
+            after_reject = bool(False)
+        return Flight(FLIGHT_MAX_STEPS, -1, t, y, f, data, amplitude, peak,
+                      Counters(steps, rejected, events))
+
+    return flight, step
+
+
+def make_step_control(system):
+    """The flight loop's step sizes and its moves other than a step: ``start_step`` (the
+    first: the exact flow's length or the method's initial step, capped by the ballistic
+    return time of the gap the flight leaves, H4), ``next_step`` (after an accepted one),
+    ``events_at`` (the events' values and rates at a point) and ``coast_on`` (past whole
+    free periods after the monitored angle crossed zero, the system's ``coast``)."""
+    values, rates, start_gap, coast = (system.event_values, system.event_rates,
+                                       system.start_gap, system.coast)
     has_exact = system.exact is not None
     exact_length = system.exact_length if has_exact else _no_length
-    locate = make_locator(values, rates, system.directions, step)
+
+    @njit(**INLINE_OPTIONS)
+    def start_step(t, y, f, data, p, settings, rate):
+        # exact steps (runge_kutta.METHOD_EXACT) are as long as the event search allows
+        if has_exact and settings.method == METHOD_EXACT:
+            h = exact_length(y, p, settings.dt)
+        else:
+            h = initial_step(settings.method, settings.dt, rate, settings.rtol)
+        gap_rate, gap_acceleration = start_gap(t, y, f, data, p)
+        return ballistic_cap(h, gap_rate, gap_acceleration)
+
+    @njit(**INLINE_OPTIONS)
+    def next_step(y, p, settings, h, err, after_reject, err_prev):
+        if has_exact and settings.method == METHOD_EXACT:
+            return exact_length(y, p, settings.dt), err_prev
+        return accepted_step_size(settings.method, h, settings.dt, err, after_reject,
+                                  err_prev)
+
+    @njit(**INLINE_OPTIONS)
+    def events_at(t, y, f, data):
+        """The events' values and rates at a point of the flight: a step's start (the
+        locator returns them at the step's end, passed on as the next start)."""
+        return values(t, y, data), rates(t, y, f, data)
+
+    @njit(**INLINE_OPTIONS)
+    def coast_on(angle, angle1, crossings, t, h, y1, f1, data, p, horizon_end, memo):
+        """After a step from t to t + h in which the monitored angle went from ``angle``
+        to ``angle1``: (time skipped, crossings, data, memo)."""
+        if (angle < 0.0) == (angle1 < 0.0):
+            return 0.0, crossings, data, memo
+        crossings += 1
+        t_cross = t + h * angle / (angle - angle1)  # the chord's zero
+        skip, data, memo = coast(t_cross, crossings, h, t + h, y1, f1, data, p,
+                                 horizon_end - (t + h), memo)
+        return skip, crossings, data, memo
+
+    return start_step, next_step, events_at, coast_on
+
+
+def make_polish(values, rates, step):
+    """Newton's polish of a located event on exact partial steps."""
 
     @njit(**INNER_OPTIONS)
     def polish(e, st, s, p, data, settings):
@@ -91,6 +214,12 @@ def make_flight(system):
         ys, fs, _ = step(method, y, f, s, p, rtol, atol)
         return s, ys, fs
 
+    return polish
+
+
+def make_turning_angle(monitor, step):
+    """The monitored angle at its turning point inside a step."""
+
     @njit(**INNER_OPTIONS)
     def angle_rate_on_interpolant(s, st):
         t, h, y, f, y1, f1 = st
@@ -115,6 +244,14 @@ def make_flight(system):
             s = s_new
         ys, fs, _ = step(settings.method, y, f, s, p, 1.0, 1.0)
         return monitor(t + s, ys, fs)[0]
+
+    return turning_angle
+
+
+def make_peak(monitor, step):
+    """The largest |monitored acceleration| of a flight, with ``refine``: ``track_peak``
+    keeps, step by step, the step around the largest value and a bracket in it;
+    ``final_peak`` refines it by golden section at the flight's end."""
 
     @njit(**INNER_OPTIONS)
     def acceleration_at(s, data):
@@ -146,118 +283,36 @@ def make_flight(system):
                 best, where = a, s
         return best, where - spacing, where + spacing
 
-    @njit(**INLINE_OPTIONS)
-    def events_at(t, y, f, data):
-        """The events' values and rates at a point of the flight: a step's start (the
-        locator returns them at the step's end, passed on as the next start)."""
-        return values(t, y, data), rates(t, y, f, data)
+    @njit(**INNER_OPTIONS)
+    def track_peak(best, best_value, t, h, y, f, y1, f1, upto, at_end):
+        """The step around the largest |monitored acceleration| so far, with a bracket in
+        it (from the step's start), after the part (0, upto] of a step: its interior
+        samples, its end value ``at_end`` (-1 if it has none), or where the flight's start
+        (an impact) is still the largest, the first sample spacing after it."""
+        inside, lo, hi = step_peak(t, h, y, f, y1, f1, upto)
+        if best[4] == 0.0:  # still the start (an impact): a maximum just after it
+            best = (y, f, y1, f1, h, t, 0.0, upto / (PEAK_SAMPLES + 1))
+        if inside > best_value:
+            best, best_value = (y, f, y1, f1, h, t, lo, hi), inside
+        if at_end > best_value:  # at the step's end: refine across it
+            spacing = h / (PEAK_SAMPLES + 1)
+            best, best_value = (y, f, y1, f1, h, t, h - spacing, h + spacing), at_end
+        return best, best_value
 
     @njit(**INNER_OPTIONS)
-    def flight(t0, y0, p, data, settings, refine):
-        method, rtol, atol = settings.method, settings.rtol, settings.atol
-        # exact steps (runge_kutta.METHOD_EXACT) are as long as the event search allows
-        exact_steps = has_exact and method == METHOD_EXACT
-        slack = max(100.0 * atol, 1e-10)  # how far beyond a level a step may start (events.py)
-        t, y = t0, y0
-        f = rhs(y, p)
-        angle, rate, accel = monitor(t, y, f)
-        if exact_steps:
-            h = exact_length(y, p, settings.dt)
-        else:
-            h = initial_step(method, settings.dt, rate, rtol)
-        gap_rate, gap_acceleration = start_gap(t, y, f, data, p)
-        h = ballistic_cap(h, gap_rate, gap_acceleration)
-        steps = rejected = events = 0
-        amplitude, peak = abs(angle), abs(accel)
-        # with refine, where |accel| is largest: the step, its end state, and a bracket
-        # (from the step's start) around its largest sample, interior or at the end
-        best, best_value = (y, f, y, f, 0.0, t, 0.0, 0.0), abs(accel)
-        after_reject = bool(False)
-        err_prev = 1.0
-        crossings, memo = 0, (math.nan, math.nan)  # zero crossings of the angle, coast's memo
-        # the events' values and rates at the step's start: the last step's end, or anew
-        # where the flight moved otherwise (an event passed, a coast)
-        start = events_at(t, y, f, data)
-        while steps + rejected < settings.max_steps:
-            if t - t0 > settings.horizon:
-                return Flight(FLIGHT_HORIZON, -1, t, y, f, data, amplitude, peak,
-                              Counters(steps, rejected, events))
-            y1, f1, err = step(method, y, f, h, p, rtol, atol)
-            if not err <= 1.0:  # NaN too: a step into a blow-up is rejected, not taken
-                rejected += 1
-                after_reject = bool(True)
-                h, underflow = rejected_step_size(h, err, err_prev, t)
-                if underflow:
-                    return Flight(FLIGHT_UNDERFLOW, -1, t, y, f, data, amplitude, peak,
-                                  Counters(steps, rejected, events))
-                continue
-            steps += 1
-            e, s, end = locate((t, h, y, f, y1, f1), (data, p, method, slack), start)
-            if e >= 0:
-                s, ys, fs = polish(e, (t, h, y, f), s, p, data, settings)
-                events += 1
-                terminal, new_data = on_event(e, t + s, ys, fs, data, p)
-                angle_e, rate_e, accel_e = monitor(t + s, ys, fs)
-                amplitude, peak = max(amplitude, abs(angle_e)), max(peak, abs(accel_e))
-                if terminal:
-                    if refine:  # the largest |accel|, refined by golden section
-                        inside, lo, hi = step_peak(t, h, y, f, y1, f1, s)
-                        if best[4] == 0.0:  # still the start: a maximum just after it
-                            best = (y, f, y1, f1, h, t, 0.0, s / (PEAK_SAMPLES + 1))
-                        if inside > best_value:
-                            best = (y, f, y1, f1, h, t, lo, hi)
-                        ya, fa, yb, fb, h_best, t_best, lo, hi = best
-                        hi = min(hi, t + s - t_best, 2.0 * h_best)
-                        lo = max(lo, 0.0)
-                        if hi > lo:
-                            stop = max(1e-7 * (hi - lo), 0.3 * math.sqrt(rtol))
-                            peak = max(peak, golden_acceleration(
-                                (ya, fa, yb, fb, h_best, t_best, p, method), lo, hi, stop))
-                    return Flight(FLIGHT_EVENT, e, t + s, ys, fs, new_data, amplitude, peak,
-                                  Counters(steps, rejected, events))
-                # passed (the striker goes by the tool): on from the event, state as it is
-                t, y, f, data = t + s, ys, fs, new_data
-                angle = angle_e
-                start = events_at(t, y, f, data)
-                continue
-            angle1, rate1, accel1 = monitor(t + h, y1, f1)
-            if not (math.isfinite(angle1) and math.isfinite(rate1)):  # RK4 has no error
-                return Flight(FLIGHT_NONFINITE, -1, t, y, f, data, amplitude, peak,
-                              Counters(steps, rejected, events))
-            amplitude = max(amplitude, abs(angle1))
-            if refine and (monitor(t, y, f)[1] < 0.0) != (rate1 < 0.0):
-                amplitude = max(amplitude, abs(turning_angle(t, h, y, f, y1, f1, p,
-                                                             settings)))
-            peak = max(peak, abs(accel1))
-            if refine:
-                inside, lo, hi = step_peak(t, h, y, f, y1, f1, h)
-                if best[4] == 0.0:  # still the start (an impact): a maximum just after it
-                    best = (y, f, y1, f1, h, t, 0.0, h / (PEAK_SAMPLES + 1))
-                if inside > best_value:
-                    best, best_value = (y, f, y1, f1, h, t, lo, hi), inside
-                if abs(accel1) > best_value:  # at the step's end: refine across it
-                    spacing = h / (PEAK_SAMPLES + 1)
-                    best = (y, f, y1, f1, h, t, h - spacing, h + spacing)
-                    best_value = abs(accel1)
-            skip = 0.0
-            if (angle < 0.0) != (angle1 < 0.0):
-                crossings += 1
-                t_cross = t + h * angle / (angle - angle1)  # the chord's zero
-                skip, data, memo = coast(t_cross, crossings, h, t + h, y1, f1, data, p,
-                                         t0 + settings.horizon - (t + h), memo)
-                t += skip
-            t, y, f, angle = t + h, y1, f1, angle1
-            start = end if skip == 0.0 else events_at(t, y, f, data)
-            if exact_steps:
-                h = exact_length(y, p, settings.dt)
-            else:
-                h, err_prev = accepted_step_size(method, h, settings.dt, err, after_reject,
-                                                 err_prev)
-            after_reject = bool(False)
-        return Flight(FLIGHT_MAX_STEPS, -1, t, y, f, data, amplitude, peak,
-                      Counters(steps, rejected, events))
+    def final_peak(best, peak, t_end, p, method, rtol):
+        """The peak, refined by golden section in the bracket kept, cut at the flight's
+        end t_end."""
+        ya, fa, yb, fb, h_best, t_best, lo, hi = best
+        hi = min(hi, t_end - t_best, 2.0 * h_best)
+        lo = max(lo, 0.0)
+        if hi > lo:
+            stop = max(1e-7 * (hi - lo), 0.3 * math.sqrt(rtol))
+            peak = max(peak, golden_acceleration((ya, fa, yb, fb, h_best, t_best, p, method),
+                                                 lo, hi, stop))
+        return peak
 
-    return flight, step
+    return track_peak, final_peak
 
 
 def make_timed_flight(rhs, scales):

@@ -2,7 +2,8 @@
 
 ``make_impact_map(contact, jump_early)`` specialises the driver to a ``Contact``
 (kernels/impact/__init__.py) and returns a ``Driver`` whose ``steady(p, data, r, settings,
-max_impacts, tol, log) -> Steady`` runs a sequence:
+repeat_tol, log, start) -> Steady`` runs a sequence (one factory each: the law, a contact,
+a section, the transient and its accelerators, the refined cycle, the whole sequence):
 
 1. a contact: Newton's law on the normal speed along the contact Jacobian, through the
    model's impulse response; a bounce that would leave slower than SPEED_EPS ends a chatter
@@ -45,7 +46,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import KERNEL_OPTIONS, INNER_OPTIONS
+from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact.tangent import MAX_SECTION_DIMENSION, NO_TRACKER, make_tracker
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_NONFINITE,
                                      FLIGHT_UNDERFLOW, NO_COST, SEQUENCE_CYCLE,
@@ -75,6 +76,25 @@ Margins = namedtuple("Margins", ["speed_min", "speed_max", "edge", "modulus", "a
 NO_MARGINS = Margins(math.nan, math.nan, math.nan, math.nan, math.nan)
 #: the driver's functions: the whole sequence, one section, one contact, Newton's law
 Driver = namedtuple("Driver", ["steady", "section", "contact", "restitute"])
+#: the refined steady cycle (``cycle``): its outcome, chatter, amplitude, free-flight time,
+#: rotor angle and time elapsed, summed striker speed at its sections, peak acceleration,
+#: how far its section state is from repeating after the period (``residual``), its cost,
+#: margins and canonical section state
+Cycle = namedtuple("Cycle", ["outcome", "chatter", "amplitude", "flight_time", "rotor_angle",
+                             "elapsed", "speed", "peak", "residual", "cost", "margins", "key"])
+#: the transient's jumps so far (make_accelerators): the count at the last jump, whether
+#: Broyden's steps are under way and have converged, the secant Jacobian of P(x) - x
+#: (row-major) and its last pair (x, P(x) - x), the state before the last Broyden step,
+#: and the count at the first jump with the last section from rest before it
+Acceleration = namedtuple("Acceleration", ["jumped_at", "secant", "converged", "jac",
+                                           "x_secant", "f_secant", "t_orbit", "y_orbit",
+                                           "first_jump", "x_rest"])
+#: how the transient ended (make_transient): with a result already (``ended``: no cycle, or
+#: the constant map's), or with its count of sections, the period found, the state and
+#: cost there, its jumps, whether it jumped early (an affine map) and the cycle that jump's
+#: refined section gave (``steady``)
+Transient = namedtuple("Transient", ["ended", "steady", "count", "period", "t", "y", "data",
+                                     "cost", "acceleration", "jumped"])
 #: what a section returns: its outcome (SEQUENCE_CYCLE: it reached the next section), the
 #: state there, whether it chattered, its amplitude, peak, free-flight time and cost, the
 #: slowest and fastest striker speed at its contacts, their smallest distance from the
@@ -240,23 +260,65 @@ def impacts_past_jump(jac, row, x, fixed, tol, limit):
     return limit
 
 
+@njit(**KERNEL_OPTIONS)
+def aitken_jump(history, last):
+    """The 2-D section state by Aitken's delta-squared on rows last - 2 .. last of
+    ``history``, each coordinate on its own: the fixed point of an affine map from three
+    of its iterates (the start and two sections, on a map known to be affine), or the
+    geometric tail removed from the last three sections of a converged sequence."""
+    return (aitken(history[last - 2, 0], history[last - 1, 0], history[last, 0]),
+            aitken(history[last - 2, 1], history[last - 1, 1], history[last, 1]))
+
+
+@njit(**KERNEL_OPTIONS)
+def not_periodic(history, count):
+    """How a sequence that found no cycle within its budget ended: not periodic where its
+    map has stopped contracting (its last step is over a tenth of the one half-way), else
+    still converging (max_steps)."""
+    recent = older = 0.0
+    for i in range(history.shape[1]):
+        recent = max(recent, abs(history[count - 1, i] - history[count - 2, i]))
+        older = max(older, abs(history[count // 2, i] - history[count // 2 - 1, i]))
+    return (SEQUENCE_NOT_PERIODIC if count >= 20 and recent > 0.1 * older else
+            SEQUENCE_MAX_STEPS)
+
+
+@njit(**INLINE_OPTIONS)
+def no_cycle(outcome, chatter, impacts, cost, key):
+    """The Steady of a sequence that ended without a cycle."""
+    return Steady(outcome=outcome, period=0, chatter=chatter, amplitude=0.0, flight_time=0.0,
+                  rotor_angle=0.0, elapsed=0.0, speed=0.0, peak=0.0, impacts=impacts,
+                  cost=cost, margins=NO_MARGINS, key=key)
+
+
+@njit(**INLINE_OPTIONS)
+def of_cycle(period, c, impacts, cost):
+    """The Steady of a sequence whose cycle of ``period`` sections is ``c`` (a Cycle, or a
+    Steady: its values and margins)."""
+    return Steady(outcome=SEQUENCE_CYCLE, period=period, chatter=c.chatter,
+                  amplitude=c.amplitude, flight_time=c.flight_time,
+                  rotor_angle=c.rotor_angle, elapsed=c.elapsed, speed=c.speed, peak=c.peak,
+                  impacts=impacts, cost=cost, margins=c.margins, key=c.key)
+
+
 def make_impact_map(c, jump_early, stability=False):
     """The driver of a Contact (see the module docstring); with ``stability`` the steady
     cycle also carries the tangent of the section map (tangent.py) for its multipliers."""
-    model = c.model
-    tracker = make_tracker(c, 2 if model.driven else 4) if stability else NO_TRACKER
-    track_start, track_flight, track_law, track_multiplier = tracker
-    edge_distance = c.edge_distance
-    flight, slide = c.flight, c.slide
-    first, key_of, from_key, jacobian = c.first, c.key, c.from_key, c.jacobian
-    normal_speed, striker_speed, normal_acceleration = (c.normal_speed, c.striker_speed,
-                                                        c.normal_acceleration)
-    gap_rate_after, pressed, settle = c.gap_rate_after, c.pressed, c.settle
-    escapes_before, flight_data = c.escapes_before, c.flight_data
-    escape_event, min_flight, smooth = c.escape_event, c.min_flight, c.smooth
-    response, compose = model.response, model.compose
-    psi_of, dpsi_of = model.psi, model.dpsi
-    rotor_angle, rotor_speed = model.rotor_angle, model.rotor_speed
+    tracker = make_tracker(c, 2 if c.model.driven else 4) if stability else NO_TRACKER
+    restitute = make_restitute(c)
+    contact = make_contact(c, restitute)
+    section = make_section(c, contact, tracker)
+    cycle = make_cycle(c, section, tracker)
+    transient = make_transient(c, jump_early, section)
+    steady = make_steady(c, jump_early, transient, cycle)
+    return Driver(steady=steady, section=section, contact=contact, restitute=restitute)
+
+
+def make_restitute(c):
+    """Newton's law of a Contact: ``restitute(t, y, data, p, r) -> (t, y)``."""
+    jacobian, response, compose = c.jacobian, c.model.response, c.model.compose
+    psi_of, dpsi_of = c.model.psi, c.model.dpsi
+    rotor_angle, rotor_speed = c.model.rotor_angle, c.model.rotor_speed
 
     @njit(**INNER_OPTIONS)
     def restitute(t, y, data, p, r):
@@ -268,6 +330,14 @@ def make_impact_map(c, jump_early, stability=False):
         impulse = -(1.0 + r) * (j_phi * w + j_psi * dpsi) / (j_phi * x_phi + j_psi * x_psi)
         return compose(t, rotor_angle(t, y), w + x_phi * impulse, psi_of(y),
                        dpsi + x_psi * impulse)
+
+    return restitute
+
+
+def make_contact(c, restitute):
+    """A contact of a Contact, from its approach to where it opens or its slide ends."""
+    normal_speed, normal_acceleration = c.normal_speed, c.normal_acceleration
+    gap_rate_after, pressed, settle, slide = c.gap_rate_after, c.pressed, c.settle, c.slide
 
     @njit(**INNER_OPTIONS)
     def contact(t, y, data, p, r, settings, refine):
@@ -290,6 +360,16 @@ def make_impact_map(c, jump_early, stability=False):
             return True, t1, y1, data1, True, zeno, amplitude, peak, cost, t, y
         return (gap_rate_after(t, y, data, p) < 0.0, t, y, data, False, zeno, 0.0, 0.0,
                 NO_COST, t, y)
+
+    return contact
+
+
+def make_section(c, contact, tracker):
+    """One section of a Contact: its contacts and flights up to the next section."""
+    _, track_flight, track_law, _ = tracker
+    flight, flight_data, escapes_before = c.flight, c.flight_data, c.escapes_before
+    striker_speed, edge_distance = c.striker_speed, c.edge_distance
+    escape_event, min_flight = c.escape_event, c.min_flight
 
     @njit(**INNER_OPTIONS)
     def section(t, y, data, p, r, settings, refine, tangent, d):
@@ -342,10 +422,18 @@ def make_impact_map(c, jump_early, stability=False):
         return Section(SEQUENCE_NOT_PERIODIC, t, y, data, chatter, amplitude, peak,
                        flight_time, cost, speed_min, speed_max, edge, tangent_ok)
 
+    return section
+
+
+def make_cycle(c, section, tracker):
+    """The refined steady cycle of a Contact, with its margins and, with the tangent
+    (``tracker``), its leading multiplier: ``cycle(...) -> Cycle``."""
+    track_start, _, _, track_multiplier = tracker
+    key_of, striker_speed, rotor_angle = c.key, c.striker_speed, c.model.rotor_angle
+
     @njit(**INNER_OPTIONS)
     def cycle(t, y, data, p, r, settings, period):
-        """The steady cycle with refined flights: (outcome, chatter, amplitude, flight time,
-        rotor angle, elapsed, speed, peak, residual, cost, margins, canonical key)."""
+        """The steady cycle of ``period`` sections from (t, y), with refined flights."""
         t0, phi0, key0 = t, rotor_angle(t, y), key_of(t, y, data, p)
         chatter = False
         amplitude = peak = flight_time = speed = 0.0
@@ -369,8 +457,10 @@ def make_impact_map(c, jump_early, stability=False):
             edge, tangent_ok = min(edge, s.edge), tangent_ok and s.tangent_ok
             t, y, data = s.t, s.y, s.data
             if s.outcome != SEQUENCE_CYCLE:
-                return (s.outcome, chatter, amplitude, flight_time, 0.0, 0.0, speed, peak,
-                        math.inf, cost, NO_MARGINS, canonical)
+                return Cycle(outcome=s.outcome, chatter=chatter, amplitude=amplitude,
+                             flight_time=flight_time, rotor_angle=0.0, elapsed=0.0,
+                             speed=speed, peak=peak, residual=math.inf, cost=cost,
+                             margins=NO_MARGINS, key=canonical)
         key = key_of(t, y, data, p)
         residual = 0.0
         for i in range(len(key)):
@@ -378,142 +468,184 @@ def make_impact_map(c, jump_early, stability=False):
         modulus = angle = math.nan
         if tangent_ok:
             modulus, angle = track_multiplier(tangent, d, rows)
-        return (SEQUENCE_CYCLE, chatter, amplitude, flight_time, rotor_angle(t, y) - phi0,
-                t - t0, speed, peak, residual, cost,
-                Margins(speed_min, speed_max, edge, modulus, angle), canonical)
+        return Cycle(outcome=SEQUENCE_CYCLE, chatter=chatter, amplitude=amplitude,
+                     flight_time=flight_time, rotor_angle=rotor_angle(t, y) - phi0,
+                     elapsed=t - t0, speed=speed, peak=peak, residual=residual, cost=cost,
+                     margins=Margins(speed_min, speed_max, edge, modulus, angle),
+                     key=canonical)
+
+    return cycle
+
+
+def make_accelerators(c):
+    """The transient's jumps on a Contact with a 2-D section state: ``land`` moves the
+    sequence to a section state, ``fixed_point`` jumps to the fixed point of the affine map
+    through the last four sections (fixed_point_jump), ``broyden`` takes Broyden's step one
+    section after a jump (secant_step). Each returns the new Acceleration and (t, y)."""
+    key_of, from_key = c.key, c.from_key
 
     @njit(**INNER_OPTIONS)
-    def steady(p, data0, r, settings, max_impacts, tol, log, start):
-        """The sequence from starting state number ``start`` (0: at rest, the tool's
-        ``first``) to its steady cycle; log[j] gets (rotor angle mod 2 pi, psi) at section
-        j (the last row takes any beyond)."""
-        t, y, data = first(p, data0, start)
-        no_tangent = np.empty((5, 0))  # the transient's sections carry no tangent
+    def land(x, t, y, data, p, history, row):
+        """The state with section state x at the rotor angle of (t, y), written as row
+        ``row`` of ``history`` (the section it replaces)."""
+        t, y = from_key(x, t, y, data, p)
         key = key_of(t, y, data, p)
-        history = np.empty((max_impacts + 2, len(key)))
-        count = 0
-        period = 0
-        cost = NO_COST
-        jumped = False
-        jumped_at = 1  # the count at the last transient jump (its rows: count - 1 on)
-        smooth_2d = not jump_early and smooth and len(key) == 2
-        secant = converged = False  # Broyden's steps under way; they reached the cycle
-        jac = (0.0, 0.0, 0.0, 0.0)
-        x_secant = f_secant = (0.0, 0.0)
-        t_orbit, y_orbit = t, y  # where the sequence was before the last Broyden step
-        first_jump = 0  # the count at the first jump, whose last row x_rest ends the
-        x_rest = (0.0, 0.0)  # sequence from rest
-        speculative = Steady(SEQUENCE_MAX_STEPS, 0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0,
-                             NO_COST, NO_MARGINS, key)
-        while count <= max_impacts:
+        for i in range(len(key)):
+            history[row, i] = key[i]
+        return t, y
+
+    @njit(**INNER_OPTIONS)
+    def fixed_point(a, history, count, t, y, data, p):
+        jump, x, jac = fixed_point_jump(history, count)
+        if not jump:  # the secant Jacobian is reset all the same (impacts_past_jump)
+            return (Acceleration(jumped_at=a.jumped_at, secant=a.secant, converged=a.converged,
+                                 jac=jac, x_secant=a.x_secant, f_secant=a.f_secant,
+                                 t_orbit=a.t_orbit, y_orbit=a.y_orbit,
+                                 first_jump=a.first_jump, x_rest=a.x_rest), t, y)
+        x_from = (history[count - 1, 0], history[count - 1, 1])
+        x_secant = (history[count - 2, 0], history[count - 2, 1])
+        f_secant = (x_from[0] - x_secant[0], x_from[1] - x_secant[1])
+        t, y = land(x, t, y, data, p, history, count - 1)
+        first = a.first_jump == 0  # the first jump: where the sequence from rest ends
+        return (Acceleration(jumped_at=count, secant=True, converged=a.converged, jac=jac,
+                             x_secant=x_secant, f_secant=f_secant, t_orbit=a.t_orbit,
+                             y_orbit=a.y_orbit, first_jump=count if first else a.first_jump,
+                             x_rest=x_from if first else a.x_rest), t, y)
+
+    @njit(**INNER_OPTIONS)
+    def broyden(a, history, count, t, y, data, p, repeat_tol):
+        """One section after a jump to x (row count - 2), at P(x): Broyden's step to the
+        fixed point; converged at the first step within repeat_tol (the steps shrink
+        superlinearly, so where it lands is well within it); where the step fails (not
+        near the map's linearisation) plain sections go on, jumps later."""
+        x = (history[count - 2, 0], history[count - 2, 1])
+        f = (history[count - 1, 0] - x[0], history[count - 1, 1] - x[1])
+        going, jac, step = secant_step(a.jac, a.x_secant, a.f_secant, x, f)
+        if not going:
+            return (Acceleration(jumped_at=a.jumped_at, secant=False, converged=False,
+                                 jac=jac, x_secant=x, f_secant=f, t_orbit=a.t_orbit,
+                                 y_orbit=a.y_orbit, first_jump=a.first_jump,
+                                 x_rest=a.x_rest), t, y)
+        to = (x[0] + step[0], x[1] + step[1])
+        t_orbit, y_orbit = t, y
+        t, y = land(to, t, y, data, p, history, count - 1)
+        converged = (abs(step[0]) <= repeat_tol * max(1.0, abs(to[0]))
+                     and abs(step[1]) <= repeat_tol * max(1.0, abs(to[1])))
+        return (Acceleration(jumped_at=count, secant=True, converged=converged, jac=jac,
+                             x_secant=x, f_secant=f, t_orbit=t_orbit, y_orbit=y_orbit,
+                             first_jump=a.first_jump, x_rest=a.x_rest), t, y)
+
+    return land, fixed_point, broyden
+
+
+def make_transient(c, jump_early, section):
+    """The transient of a Contact: ``transient(p, data, r, settings, repeat_tol, log, t, y,
+    history) -> Transient``, sections from (t, y) until p of them repeat (``history``
+    holds their states), accelerated where the map allows it: on an affine map (
+    ``jump_early``) by Aitken's jump from the start and two sections (aitken_jump), on
+    another smooth map with a 2-D section by fixed-point jumps and Broyden's steps
+    (make_accelerators)."""
+    key_of, striker_speed, rotor_angle = c.key, c.striker_speed, c.model.rotor_angle
+    psi_of, smooth = c.model.psi, c.smooth
+    land, fixed_point, broyden = make_accelerators(c)
+
+    @njit(**INNER_OPTIONS)
+    def transient(p, data, r, settings, repeat_tol, log, t, y, history):
+        no_tangent = np.empty((5, 0))  # the transient's sections carry no tangent
+        smooth_2d = not jump_early and smooth and history.shape[1] == 2
+        a = Acceleration(jumped_at=1, secant=False, converged=False, jac=(0.0, 0.0, 0.0, 0.0),
+                         x_secant=(0.0, 0.0), f_secant=(0.0, 0.0), t_orbit=t, y_orbit=y,
+                         first_jump=0, x_rest=(0.0, 0.0))
+        count = period = 0
+        cost, jumped = NO_COST, False
+        speculative = no_cycle(SEQUENCE_MAX_STEPS, False, 0, NO_COST, key_of(t, y, data, p))
+        while count <= settings.max_impacts:
             key = key_of(t, y, data, p)
             for i in range(len(key)):
                 history[count, i] = key[i]
             slot = min(count, log.shape[0] - 1)
             log[slot, 0], log[slot, 1] = rotor_angle(t, y) % (2.0 * math.pi), psi_of(y)
             count += 1
-            period = classify_period(history, count, tol, MAX_PERIOD)
+            period = classify_period(history, count, repeat_tol, MAX_PERIOD)
             # right after a transient jump, one section more: Aitken at the end needs three
             # sections of the map's own (a jumped state's section repeats it only to tol)
-            if period > 0 and not (jumped_at > 1 and count < jumped_at + 2):
+            if period > 0 and not (a.jumped_at > 1 and count < a.jumped_at + 2):
                 break
             # an affine map of slope r = 0 is constant: its first section is the cycle
             constant = jump_early and r == 0.0
-            # bool(): a literal would compile every function below twice (kernels/__init__.py)
-            refine = bool(constant)
-            if secant and count == jumped_at + 1:
-                # one section after a jump to x (row count - 2), at P(x): Broyden's step
-                # to the fixed point, from the secant Jacobian of the jumps so far
-                x = (history[count - 2, 0], history[count - 2, 1])
-                f = (history[count - 1, 0] - x[0], history[count - 1, 1] - x[1])
-                going, jac, step = secant_step(jac, x_secant, f_secant, x, f)
-                x_secant, f_secant = x, f
-                if going:
-                    x = (x[0] + step[0], x[1] + step[1])
-                    t_orbit, y_orbit = t, y
-                    t, y = from_key(x, t, y, data, p)
-                    key = key_of(t, y, data, p)
-                    for i in range(len(key)):
-                        history[count - 1, i] = key[i]
-                    jumped_at = count
-                    # done at the first step within tol: the steps shrink superlinearly,
-                    # so where it lands is well within tol (a step's error is a fraction
-                    # of the step); the cycle from there
-                    if (abs(step[0]) <= tol * max(1.0, abs(x[0]))
-                            and abs(step[1]) <= tol * max(1.0, abs(x[1]))):
-                        converged = True
-                        period = 1
-                        break
-                else:  # not near the map's linearisation: plain sections, jumps later
-                    secant = False
-            elif smooth_2d and count - jumped_at >= 3:
-                # a smooth 2-D map: jump to the fixed point of the affine map through the
-                # last four sections; then Broyden's steps from there (above), or, where
-                # they fail, the sections after it confirm or carry on (and four more
-                # allow another jump)
-                jump, x, jac = fixed_point_jump(history, count)
-                if jump:
-                    x_from = (history[count - 1, 0], history[count - 1, 1])
-                    x_secant = (history[count - 2, 0], history[count - 2, 1])
-                    f_secant = (history[count - 1, 0] - x_secant[0],
-                                history[count - 1, 1] - x_secant[1])
-                    t, y = from_key(x, t, y, data, p)
-                    key = key_of(t, y, data, p)
-                    for i in range(len(key)):
-                        history[count - 1, i] = key[i]
-                    jumped_at = count
-                    secant = True
-                    if first_jump == 0:
-                        first_jump, x_rest = count, x_from
-            if jump_early and count == 3:
-                # the start and two sections fix an affine map: jump to its fixed point by
-                # Aitken's delta-squared; the next section, refined, is expected to confirm
-                x = (aitken(history[0, 0], history[1, 0], history[2, 0]),
-                     aitken(history[0, 1], history[1, 1], history[2, 1]))
-                t, y = from_key(x, t, y, data, p)
-                key = key_of(t, y, data, p)
-                for i in range(len(key)):
-                    history[count - 1, i] = key[i]
+            refine = bool(constant)  # bool(): see kernels/__init__.py
+            if a.secant and count == a.jumped_at + 1:
+                a, t, y = broyden(a, history, count, t, y, data, p, repeat_tol)
+                if a.converged:
+                    period = 1
+                    break
+            elif smooth_2d and count - a.jumped_at >= 3:
+                a, t, y = fixed_point(a, history, count, t, y, data, p)
+            if jump_early and count == 3:  # the next section, refined, is to confirm it
+                t, y = land(aitken_jump(history, 2), t, y, data, p, history, count - 1)
                 refine = jumped = True
             speed = striker_speed(t, y, data, p)
             t_start, phi_start = t, rotor_angle(t, y)
             s = section(t, y, data, p, r, settings, refine, no_tangent, int(0))
             cost = add(cost, s.cost)
             if s.outcome != SEQUENCE_CYCLE:
-                return Steady(s.outcome, 0, s.chatter, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, count,
-                              cost, NO_MARGINS, key)
+                return Transient(ended=bool(True), steady=no_cycle(
+                    s.outcome, s.chatter, count, cost, key_of(t, y, data, p)), count=count,
+                    period=int(0), t=t, y=y,
+                    data=data, cost=cost, acceleration=a, jumped=jumped)
             t, y, data = s.t, s.y, s.data
             if refine:
                 # one impact a cycle on a smooth map: no edge, the multiplier in closed form
-                speculative = Steady(SEQUENCE_CYCLE, 1, s.chatter, s.amplitude,
-                                     s.flight_time, rotor_angle(t, y) - phi_start,
-                                     t - t_start, speed, s.peak, 0, NO_COST,
-                                     Margins(speed, speed, math.inf, math.nan, math.nan),
-                                     key_of(t, y, data, p))
+                speculative = Steady(
+                    outcome=SEQUENCE_CYCLE, period=1, chatter=s.chatter,
+                    amplitude=s.amplitude, flight_time=s.flight_time,
+                    rotor_angle=rotor_angle(t, y) - phi_start, elapsed=t - t_start,
+                    speed=speed, peak=s.peak, impacts=0, cost=NO_COST,
+                    margins=Margins(speed, speed, math.inf, math.nan, math.nan),
+                    key=key_of(t, y, data, p))
             if constant:
-                return Steady(SEQUENCE_CYCLE, 1, s.chatter, s.amplitude, s.flight_time,
-                              speculative.rotor_angle, speculative.elapsed,
-                              striker_speed(t, y, data, p), s.peak, 1, cost,
-                              speculative.margins, speculative.key)
+                return Transient(ended=bool(True), steady=Steady(
+                    outcome=SEQUENCE_CYCLE, period=1, chatter=s.chatter,
+                    amplitude=s.amplitude, flight_time=s.flight_time,
+                    rotor_angle=speculative.rotor_angle, elapsed=speculative.elapsed,
+                    speed=striker_speed(t, y, data, p), peak=s.peak, impacts=1, cost=cost,
+                    margins=speculative.margins, key=speculative.key), count=count,
+                    period=int(1), t=t, y=y, data=data, cost=cost, acceleration=a,
+                    jumped=jumped)
+        return Transient(ended=bool(False), steady=speculative, count=count, period=period, t=t, y=y,
+                         data=data, cost=cost, acceleration=a, jumped=jumped)
+
+    return transient
+
+
+def make_steady(c, jump_early, transient, cycle):
+    """The whole sequence of a Contact: ``steady(p, data, r, settings, repeat_tol, log,
+    start) -> Steady`` (see the module docstring)."""
+    first, key_of, from_key, smooth = c.first, c.key, c.from_key, c.smooth
+
+    @njit(**INNER_OPTIONS)
+    def steady(p, data0, r, settings, repeat_tol, log, start):
+        """The sequence from starting state number ``start`` (0: at rest, the tool's
+        ``first``) to its steady cycle, within settings.max_impacts, its cycle's section
+        states repeating to ``repeat_tol``; log[j] gets (rotor angle mod 2 pi, psi) at
+        section j (the last row takes any beyond)."""
+        t, y, data = first(p, data0, start)
+        history = np.empty((settings.max_impacts + 2, len(key_of(t, y, data, p))))
+        tr = transient(p, data, r, settings, repeat_tol, log, t, y, history)
+        if tr.ended:
+            return tr.steady
+        count, period, a, cost = tr.count, tr.period, tr.acceleration, tr.cost
+        t, y, data = tr.t, tr.y, tr.data
         impacts = count - 2 * period
-        if first_jump > 0 and period == 1:  # the impacts from rest, not the sections flown
-            impacts = impacts_past_jump(jac, first_jump - 1, x_rest,
-                                        (history[count - 1, 0], history[count - 1, 1]), tol,
-                                        IMPACTS_COUNTED)
+        if a.first_jump > 0 and period == 1:  # the impacts from rest, not the sections flown
+            impacts = impacts_past_jump(a.jac, a.first_jump - 1, a.x_rest,
+                                        (history[count - 1, 0], history[count - 1, 1]),
+                                        repeat_tol, IMPACTS_COUNTED)
         if period == 0:
-            recent = older = 0.0
-            for i in range(history.shape[1]):
-                recent = max(recent, abs(history[count - 1, i] - history[count - 2, i]))
-                older = max(older, abs(history[count // 2, i] - history[count // 2 - 1, i]))
-            outcome = (SEQUENCE_NOT_PERIODIC if count >= 20 and recent > 0.1 * older else
-                       SEQUENCE_MAX_STEPS)
-            return Steady(outcome, 0, False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, max_impacts, cost,
-                          NO_MARGINS, key)
-        if jumped and period == 1 and speculative.outcome == SEQUENCE_CYCLE:
-            return Steady(SEQUENCE_CYCLE, 1, speculative.chatter, speculative.amplitude,
-                          speculative.flight_time, speculative.rotor_angle,
-                          speculative.elapsed, speculative.speed, speculative.peak, impacts,
-                          cost, speculative.margins, speculative.key)
+            return no_cycle(not_periodic(history, count), False, settings.max_impacts, cost,
+                            key_of(t, y, data, p))
+        if tr.jumped and period == 1 and tr.steady.outcome == SEQUENCE_CYCLE:
+            return of_cycle(1, tr.steady, impacts, cost)
         # the steady cycle from where the sequence is (on the cycle, to tol); at period 1 on
         # a smooth map from Aitken's extrapolation of the last three sections instead, kept
         # if the cycle's residual beats the last iteration's step (H13)
@@ -522,25 +654,20 @@ def make_impact_map(c, jump_early, stability=False):
             last_step = max(last_step, abs(history[count - 1, i] - history[count - 2, i]))
         t_run, y_run = t, y
         extrapolated = (period == 1 and count >= 3 and not jump_early and smooth
-                        and not converged)
+                        and not a.converged)
         if extrapolated:
-            x = (aitken(history[count - 3, 0], history[count - 2, 0], history[count - 1, 0]),
-                 aitken(history[count - 3, 1], history[count - 2, 1], history[count - 1, 1]))
-            t_run, y_run = from_key(x, t, y, data, p)
+            t_run, y_run = from_key(aitken_jump(history, count - 1), t, y, data, p)
         result = cycle(t_run, y_run, data, p, r, settings, period)
-        cost = add(cost, result[9])
-        if extrapolated and result[8] > last_step:
+        cost = add(cost, result.cost)
+        if extrapolated and result.residual > last_step:
             result = cycle(t, y, data, p, r, settings, period)
-            cost = add(cost, result[9])
-        if converged and result[8] > tol * max(1.0, abs(history[count - 1, 0]),
-                                               abs(history[count - 1, 1])):
-            result = cycle(t_orbit, y_orbit, data, p, r, settings, period)
-            cost = add(cost, result[9])
-        outcome, chatter, amplitude, flight_time, angle, elapsed, speed, peak = result[:8]
-        if outcome != SEQUENCE_CYCLE:  # the cycle did not repeat after all
-            return Steady(SEQUENCE_MAX_STEPS, 0, chatter, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
-                          impacts, cost, NO_MARGINS, key)
-        return Steady(SEQUENCE_CYCLE, period, chatter, amplitude, flight_time, angle, elapsed,
-                      speed, peak, impacts, cost, result[10], result[11])
+            cost = add(cost, result.cost)
+        if a.converged and result.residual > repeat_tol * max(
+                1.0, abs(history[count - 1, 0]), abs(history[count - 1, 1])):
+            result = cycle(a.t_orbit, a.y_orbit, data, p, r, settings, period)
+            cost = add(cost, result.cost)
+        if result.outcome != SEQUENCE_CYCLE:  # the cycle did not repeat after all
+            return no_cycle(SEQUENCE_MAX_STEPS, result.chatter, impacts, cost, result.key)
+        return of_cycle(period, result, impacts, cost)
 
-    return Driver(steady, section, contact, restitute)
+    return steady

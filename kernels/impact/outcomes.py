@@ -17,9 +17,12 @@ FLIGHT_NONFINITE = 4  # a fixed step (RK4) reached a state that is not finite
 Counters = namedtuple("Counters", ["steps", "rejected", "events"])
 NO_COST = Counters(0, 0, 0)
 
-#: the settings of a flight: the method (runge_kutta.METHOD_*), its tolerances, RK4's step,
-#: the step budget and the horizon (in the flight's time)
-Settings = namedtuple("Settings", ["method", "rtol", "atol", "dt", "max_steps", "horizon"])
+#: the settings of a solve, by the names the spec gives them: the method
+#: (runge_kutta.METHOD_*), its tolerances, the fixed step (RK4's ``dt``, or the exact flow's
+#: step), a flight's step budget and horizon (in the flight's time), and for an impact
+#: sequence its budget of impacts and the starting states per case
+Settings = namedtuple("Settings", ["method", "rtol", "atol", "dt", "max_steps", "horizon",
+                                   "max_impacts", "starts"], defaults=(1000, 1))
 
 
 @njit(**INNER_OPTIONS)

@@ -182,16 +182,9 @@ def make_acceleration_differential(model, n):
 
 
 def make_tracker(c, n):
-    """The tangent's updates for a Contact (see the module docstring)."""
-    model = c.model
-    driven = model.driven
-    state, coordinates = model.tangent_state, model.tangent_coordinates
-    response, response_slope = model.response, model.response_slope
-    monitor, rotor_speed, dpsi_of = model.monitor, model.rotor_speed, model.dpsi
-    gradient, jacobian, jacobian_slope = c.event_gradient, c.jacobian, c.jacobian_slope
-    flow_derivative = make_variational(model, n)
-    slide_tangent, accumulation_tangent = c.slide_tangent, c.accumulation_tangent
-    carry = make_event_carry(n)
+    """The tangent's updates for a Contact (see the module docstring): the section's
+    coordinates at the start, through a flight, through a contact, and the multiplier."""
+    driven, gradient = c.model.driven, c.event_gradient
 
     @njit(**INNER_OPTIONS)
     def start(t, y, data, basis):
@@ -220,6 +213,26 @@ def make_tracker(c, n):
         return d, rows
 
     @njit(**INNER_OPTIONS)
+    def multiplier(tangent, d, rows):
+        a = np.empty((d, d))
+        for i in range(d):
+            for j in range(d):
+                a[i, j] = tangent[rows[i], j]
+        return leading_multiplier(a, d)
+
+    return Tracker(start, make_tangent_flight(c, n), make_tangent_law(c), multiplier)
+
+
+def make_tangent_flight(c, n):
+    """The columns carried through a flight: the variational equations to the event and
+    its time's shift (the saltation at a moving event)."""
+    model, gradient = c.model, c.event_gradient
+    state, coordinates = model.tangent_state, model.tangent_coordinates
+    monitor, rotor_speed = model.monitor, model.rotor_speed
+    flow_derivative = make_variational(model, n)
+    carry = make_event_carry(n)
+
+    @njit(**INNER_OPTIONS)
     def flight(tangent, d, t0, y0, t1, y1, f1, data1, p, settings):
         """Carry the columns from the event at t0 to the event at t1 (data1: the system
         data at the arrival). False if the variational flight failed."""
@@ -240,6 +253,18 @@ def make_tracker(c, n):
             for i in range(5):
                 tangent[i, j] = out[i]
         return math.isfinite(g_dot) and g_dot != 0.0
+
+    return flight
+
+
+def make_tangent_law(c):
+    """The columns carried through a contact: an accumulated chatter's settle, Newton's law
+    differentiated, the slide's tangent."""
+    model, driven = c.model, c.model.driven
+    response, response_slope = model.response, model.response_slope
+    rotor_speed, dpsi_of = model.rotor_speed, model.dpsi
+    jacobian, jacobian_slope = c.jacobian, c.jacobian_slope
+    slide_tangent, accumulation_tangent = c.slide_tangent, c.accumulation_tangent
 
     @njit(**INNER_OPTIONS)
     def law(tangent, d, t, y, data, t_law, y_law, t1, y1, data1, p, r, slid, zeno,
@@ -275,15 +300,8 @@ def make_tracker(c, n):
                                       settings)
         return ok
 
-    @njit(**INNER_OPTIONS)
-    def multiplier(tangent, d, rows):
-        a = np.empty((d, d))
-        for i in range(d):
-            for j in range(d):
-                a[i, j] = tangent[rows[i], j]
-        return leading_multiplier(a, d)
+    return law
 
-    return Tracker(start, flight, law, multiplier)
 
 
 

@@ -1,9 +1,10 @@
-"""The six pendulum systems, models x tools, each the integration core's impact map
-specialised to it, and a block function that solves the cases of one system.
+"""The pendulum systems of the table (kernels/pendulum/table.py), each the integration
+core's impact map specialised to it, and a block function that solves the cases of one
+system.
 
-Each block function is module level (numba caches it on disk) and compiled only when a
-sweep has a case of its system: a sweep of the paper model on the rotor stop never compiles
-the rotor model on the blade.
+Each system's entry point is made here from the table, module level (numba caches it on
+disk), and compiled only when a sweep has a case of its system: a sweep of the paper model
+on the rotor stop never compiles the rotor model on the blade.
 """
 
 import math
@@ -17,6 +18,7 @@ from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings, add
 from kernels.impact.runge_kutta import METHOD_RK4
 from kernels.pendulum import models, tools
 from kernels.pendulum.cases import C, ROW
+from kernels.pendulum.table import RETURNING_TOOLS, SYSTEMS, entry_name
 
 
 @njit(**KERNEL_OPTIONS)
@@ -47,12 +49,12 @@ def rotor_parameters(case):
 
 
 @njit(**KERNEL_OPTIONS)
-def stop_data(case):
+def rotor_stop_data(case):
     return 0.0, case[C.k]  # the stop at psi = 0
 
 
 @njit(**KERNEL_OPTIONS)
-def blade_data(case):
+def lab_window_data(case):
     return (-tools.TWO_PI, case[C.tool_window], case[C.k], 0.0, 1.0)
 
 
@@ -62,27 +64,27 @@ ATTRACTOR_TOL = 1e-6
 
 
 def make_block(contact, jump_early, parameters, data_of, frequency, stability=False):
-    """The block function of a system: each case's steady state into its row (ROW), and
-    into ``log`` the section impacts (rotor angle mod 2 pi, psi) of the last case.
-    ``frequency``: whether flights end where they started (the rotor stop), so that pi over
-    the flight time is the free oscillation's frequency coefficient. ``stability``: carry
-    the tangent through the steady cycle for its multipliers. With ``starts`` > 1 each case
-    is also run from starts - 1 more starting states (the tool's ``first``), and the
-    distinct attractors they reach are counted."""
+    """The block function of a system, ``block(cases, settings, rows, log)``: each case's
+    steady state into its row (ROW), and into ``log`` the section impacts (rotor angle mod
+    2 pi, psi) of the last case. ``frequency``: whether flights end where they started (the
+    rotor stop), so that pi over the flight time is the free oscillation's frequency
+    coefficient. ``stability``: carry the tangent through the steady cycle for its
+    multipliers. With ``settings.starts`` > 1 each case is also run from starts - 1 more
+    starting states (the tool's ``first``), and the distinct attractors they reach are
+    counted."""
     steady = make_impact_map(contact, jump_early, stability).steady
-    horizon = contact.horizon
 
     @njit(**INNER_OPTIONS)
-    def block(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-        settings = Settings(method, rtol, atol, dt, 10 ** 6, horizon)
-        tol = section_repeat_tol(method, rtol)
+    def block(cases, settings, rows, log):
+        repeat_tol = section_repeat_tol(settings.method, settings.rtol)
+        starts = settings.starts
         for c in range(cases.shape[0]):
             case = cases[c]
             row = rows[c]
             for j in range(row.shape[0]):
                 row[j] = math.nan
             p, data, r = parameters(case), data_of(case), case[C.R]
-            s = steady(p, data, r, settings, max_impacts, tol, log, int(0))
+            s = steady(p, data, r, settings, repeat_tol, log, int(0))
             row[ROW.outcome] = s.outcome
             cost = s.cost
             if starts > 1:
@@ -93,7 +95,7 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
                     seen[0, 3 + i] = s.key[i]
                 distinct, same = int(1), int(1)
                 for j in range(1, starts):
-                    other = steady(p, data, r, settings, max_impacts, tol, log, j)
+                    other = steady(p, data, r, settings, repeat_tol, log, j)
                     cost = add(cost, other.cost)
                     seen[distinct, 0], seen[distinct, 1] = other.outcome, other.period
                     seen[distinct, 2] = 1.0 if other.chatter else 0.0
@@ -150,93 +152,52 @@ def _same_attractor(seen, a, b, n_keys):
     return True
 
 
-_ARGS = (tools.rotor_stop, tools.lab_window)
-_PARAMETERS = {models.MODEL_PAPER: paper_parameters, models.MODEL_RIGID: rigid_parameters,
-               models.MODEL_ROTOR: rotor_parameters}
-_MODELS = {models.MODEL_PAPER: models.PAPER, models.MODEL_RIGID: models.RIGID,
-           models.MODEL_ROTOR: models.ROTOR}
+PARAMETERS = {"paper": paper_parameters, "rigid": rigid_parameters,
+               "rotor": rotor_parameters}
+DATA = {"rotor_stop": rotor_stop_data, "lab_window": lab_window_data}
+#: each system's contact (the core's description of it), by the table's names
+CONTACTS = {(s.model, s.tool): getattr(tools, s.tool)(getattr(models, s.model.upper()))
+            for s in SYSTEMS}
+#: a flight's step budget
+MAX_STEPS = 10 ** 6
 
 
-def _block(model, tool, stability=False):
-    """The block function of a model on a tool (0: rotor stop, 1: lab window); only the
-    constant-speed models on the rotor stop have a smooth (affine) map to jump along."""
-    contact = _ARGS[tool](_MODELS[model])
-    return make_block(contact, tool == 0 and model != models.MODEL_ROTOR, _PARAMETERS[model],
-                      (stop_data, blade_data)[tool], tool == 0, stability)
+def build_block(system, contact, parameters, data_of, stability=False, returning=None):
+    """The block function of a table row (kernels/pendulum/table.py) from its contact,
+    its parameters and system data of a case; ``returning``: whether its flights end
+    where they started (default: its tool is one of table.RETURNING_TOOLS)."""
+    returning = system.tool in RETURNING_TOOLS if returning is None else returning
+    return make_block(contact, system.affine, parameters, data_of, returning, stability)
 
 
-_paper_stop = _block(models.MODEL_PAPER, 0)
-_rigid_stop = _block(models.MODEL_RIGID, 0)
-_rotor_stop = _block(models.MODEL_ROTOR, 0)
-_paper_blade = _block(models.MODEL_PAPER, 1)
-_rigid_blade = _block(models.MODEL_RIGID, 1)
-_rotor_blade = _block(models.MODEL_ROTOR, 1)
-# with the tangent: the systems whose multipliers are not known in closed form (the affine
-# map of the constant-speed models on the rotor stop has the multiplier R)
-_rotor_stop_tangent = _block(models.MODEL_ROTOR, 0, True)
-_paper_blade_tangent = _block(models.MODEL_PAPER, 1, True)
-_rigid_blade_tangent = _block(models.MODEL_RIGID, 1, True)
-_rotor_blade_tangent = _block(models.MODEL_ROTOR, 1, True)
+#: a module-level entry point: numba caches a function on disk by its name and source
+#: file, and a closure called from Python would be compiled again in every process
+_ENTRY = "def {name}(cases, settings, rows, log):\n    _{name}(cases, settings, rows, log)\n"
 
 
-# module-level entry points: numba caches these on disk (a closure called from Python is
-# recompiled in every process)
-@njit(**KERNEL_OPTIONS)
-def paper_on_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _paper_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
+def _entry_point(name: str, block):
+    namespace = globals()
+    namespace["_" + name] = block
+    exec(compile(_ENTRY.format(name=name), __file__, "exec"), namespace)
+    namespace[name] = njit(**KERNEL_OPTIONS)(namespace[name])
+    return namespace[name]
 
 
-@njit(**KERNEL_OPTIONS)
-def rigid_on_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _rigid_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
+#: the entry point of each system (a table row), and with the tangent of each that needs
+#: it for its multipliers (elsewhere they are known in closed form)
+ENTRY_POINTS, TANGENT_ENTRY_POINTS = {}, {}
+for _system in SYSTEMS:
+    _args = (_system, CONTACTS[_system.model, _system.tool], PARAMETERS[_system.model],
+             DATA[_system.tool])
+    ENTRY_POINTS[_system] = _entry_point(entry_name(_system), build_block(*_args))
+    if _system.tangent:
+        TANGENT_ENTRY_POINTS[_system] = _entry_point(entry_name(_system, True),
+                                                     build_block(*_args, stability=True))
 
 
-@njit(**KERNEL_OPTIONS)
-def rotor_on_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _rotor_stop(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
-
-
-@njit(**KERNEL_OPTIONS)
-def paper_on_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _paper_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
-
-
-@njit(**KERNEL_OPTIONS)
-def rigid_on_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _rigid_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
-
-
-@njit(**KERNEL_OPTIONS)
-def rotor_on_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _rotor_blade(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
-
-
-@njit(**KERNEL_OPTIONS)
-def rotor_on_stop_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _rotor_stop_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
-
-
-@njit(**KERNEL_OPTIONS)
-def paper_on_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _paper_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
-
-
-@njit(**KERNEL_OPTIONS)
-def rigid_on_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _rigid_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
-
-
-@njit(**KERNEL_OPTIONS)
-def rotor_on_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log):
-    _rotor_blade_tangent(cases, method, rtol, atol, dt, max_impacts, starts, rows, log)
-
-
-#: the block function of each (model, tool), by their codes
-SYSTEMS = {(models.MODEL_PAPER, 0): paper_on_stop, (models.MODEL_RIGID, 0): rigid_on_stop,
-           (models.MODEL_ROTOR, 0): rotor_on_stop, (models.MODEL_PAPER, 1): paper_on_blade,
-           (models.MODEL_RIGID, 1): rigid_on_blade, (models.MODEL_ROTOR, 1): rotor_on_blade}
-#: the same with the tangent, where the multipliers need it
-TANGENT_SYSTEMS = {(models.MODEL_ROTOR, 0): rotor_on_stop_tangent,
-                   (models.MODEL_PAPER, 1): paper_on_blade_tangent,
-                   (models.MODEL_RIGID, 1): rigid_on_blade_tangent,
-                   (models.MODEL_ROTOR, 1): rotor_on_blade_tangent}
+def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1):
+    """The Settings of a solve on a system (a table row), by name."""
+    return Settings(method=int(method), rtol=float(rtol), atol=float(atol), dt=float(dt),
+                    max_steps=MAX_STEPS,
+                    horizon=float(CONTACTS[system.model, system.tool].horizon),
+                    max_impacts=int(max_impacts), starts=int(starts))

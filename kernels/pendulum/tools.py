@@ -83,17 +83,17 @@ def face_psi(target, psi, k):
 
 
 @njit(**INLINE_OPTIONS)
-def _never(t, y, data, p):
+def never(t, y, data, p):
     return False
 
 
 @njit(**INLINE_OPTIONS)
-def _no_slope(t, y, data):
+def no_slope(t, y, data):
     return 0.0, 0.0  # a contact Jacobian that does not change with psi
 
 
 @njit(**INLINE_OPTIONS)
-def _no_edge(t, y, data):
+def no_edge(t, y, data):
     return math.inf
 
 
@@ -228,10 +228,15 @@ def rotor_stop(model):
     def event_gradient(t, y, data):
         return 0.0, 1.0, 0.0  # g = psi - stop
 
-    return Contact(model, flight, no_slide, first, key, from_key, jacobian, normal_speed,
-                   normal_speed, normal_acceleration, gap_rate_after, _never, settle,
-                   escapes_before, flight_data, 1, 0.0, math.inf, True, event_gradient,
-                   _no_slope, _no_slide_tangent, _settle_in_place, _no_edge)
+    return Contact(model=model, flight=flight, slide=no_slide, first=first, key=key,
+                   from_key=from_key, jacobian=jacobian, normal_speed=normal_speed,
+                   striker_speed=normal_speed, normal_acceleration=normal_acceleration,
+                   gap_rate_after=gap_rate_after, pressed=never, settle=settle,
+                   escapes_before=escapes_before, flight_data=flight_data, escape_event=1,
+                   min_flight=0.0, horizon=math.inf, smooth=True,
+                   event_gradient=event_gradient, jacobian_slope=no_slope,
+                   slide_tangent=_no_slide_tangent, accumulation_tangent=_settle_in_place,
+                   edge_distance=no_edge)
 
 
 SLIDE_SAMPLES = 128  # pressing samples along a kinematic slide (a release is bracketed)
@@ -718,8 +723,12 @@ def lab_window(model):
         """How far inside the blade's reach a contact is: window - |psi| [rad]."""
         return data[1] - abs(psi_of(y))
 
-    return Contact(model, flight, slide, first, key, from_key, jacobian, normal_speed,
-                   striker_speed, normal_acceleration, gap_rate_after, pressed, settle,
-                   _never, flight_data, 2, SECTION_MIN_FLIGHT, LAB_HORIZON, False,
-                   event_gradient, jacobian_slope, slide_tangent, accumulation_tangent,
-                   edge_distance)
+    return Contact(model=model, flight=flight, slide=slide, first=first, key=key,
+                   from_key=from_key, jacobian=jacobian, normal_speed=normal_speed,
+                   striker_speed=striker_speed, normal_acceleration=normal_acceleration,
+                   gap_rate_after=gap_rate_after, pressed=pressed, settle=settle,
+                   escapes_before=never, flight_data=flight_data, escape_event=2,
+                   min_flight=SECTION_MIN_FLIGHT, horizon=LAB_HORIZON, smooth=False,
+                   event_gradient=event_gradient, jacobian_slope=jacobian_slope,
+                   slide_tangent=slide_tangent, accumulation_tangent=accumulation_tangent,
+                   edge_distance=edge_distance)

@@ -1,0 +1,138 @@
+"""The accuracy policy of the integrated pendulum: what rtol, atol and step a requested
+accuracy ``tol`` takes, and the error each solve reports (``error_estimate``).
+
+``auto`` without a closed form solves twice by DOPRI5 and estimates the error from the
+difference; the exact flights (a table row with ``exact_flow``) take their step from the
+event search's interpolant error and report the section repeat tolerance; the rotor
+stop's closed form is exact to round-off.
+"""
+
+import math
+
+import numpy as np
+
+from kernels.impact.outcomes import SEQUENCE_CYCLE
+from kernels.impact.runge_kutta import METHOD_DOPRI5
+from kernels.pendulum.cases import ROW
+
+#: auto without a closed form: DOPRI5 at atol = rtol (psi and psi' are O(1), so the absolute
+#: error is set on that scale, H5) and rtol = tol x a factor calibrated on 360 random rotor
+#: designs (seeds 0-29 of tests/test_auto.py's sampler) against a 1e-13 reference: the
+#: largest factor whose worst output error stayed below tol with a margin of 1.5-2.
+#: Tolerance proportionality fails at loose tolerances (rtol = tol/10 gave 2.9 tol at
+#: tol = 1e-3), hence the smaller factors there. DOPRI5 beat fixed-step RK4 at every
+#: accuracy measured. Factors by log10(tol), linear in between.
+AUTO_RTOL_FACTOR = ((-3.0, 0.01), (-4.0, 0.08), (-5.0, 0.1), (-6.0, 0.2), (-8.0, 0.3))
+AUTO_ATOL_PER_RTOL = 1.0
+
+
+def auto_rtol(tol):
+    """DOPRI5's rtol for a requested output accuracy tol (AUTO_RTOL_FACTOR)."""
+    x, f = np.array(AUTO_RTOL_FACTOR).T
+    return tol * float(np.interp(math.log10(tol), x[::-1], f[::-1]))
+
+
+#: the values whose relative error auto estimates (and bounds by tol)
+ESTIMATED = (ROW.amplitude, ROW.frequency, ROW.interval, ROW.speed, ROW.acceleration,
+             ROW.rotor_speed)
+#: auto without a closed form: each case is solved at AUTO_COARSE times the calibrated rtol
+#: and AUTO_REFINE times finer; the finer solve is reported, with its error estimated as
+#: |coarse - fine| / (AUTO_REFINE - 1) (DOPRI5's global error proportional to rtol); a case
+#: whose estimate exceeds AUTO_ACCEPT tol (a safety factor on that proportionality) is
+#: solved again AUTO_REFINE times finer, at most AUTO_ROUNDS times
+AUTO_ACCEPT = 0.1
+AUTO_COARSE = 2.0
+AUTO_REFINE = 8.0
+AUTO_ROUNDS = 3
+
+
+def estimated_error(coarse, fine, margins=False):
+    """Relative difference of the cycle's values of two solves over the finer one's error
+    ratio: the estimated relative error of the finer solve; inf where the two disagree on
+    the outcome, the period or the chatter; NaN where neither has a cycle. The leading
+    multiplier (where asked for) counts on the unit circle's scale, |dmu|/max(1, |mu|): it
+    may be 0, and a sensitive blade design's multiplier was 1.3e-5 off at tol 1e-8 while
+    the other values met it. With ``margins`` (asked for) the slowest-over-fastest impact
+    ratio and the edge distance count too, on the scale of 1 (a ratio; radians): an edge
+    distance was 1.6e-7 off at tol 1e-8 after a flight of ten rotor turns, where the values
+    above met tol."""
+    values = [np.abs(coarse[:, j] - fine[:, j]) / np.abs(fine[:, j]) for j in ESTIMATED]
+    mu = [rows[:, ROW.modulus] * np.exp(1j * rows[:, ROW.angle]) for rows in (coarse, fine)]
+    values.append(np.abs(mu[0] - mu[1]) / np.maximum(1.0, np.abs(mu[1])))
+    if margins:
+        for j in (ROW.speed_ratio, ROW.edge):
+            values.append(np.abs(coarse[:, j] - fine[:, j])
+                          / np.maximum(1.0, np.abs(fine[:, j])))
+    with np.errstate(invalid="ignore"):
+        diff = np.nanmax(np.where(np.isnan(values), -np.inf, values), axis=0)
+    error = diff / (AUTO_REFINE - 1.0)
+    same = ((coarse[:, ROW.outcome] == fine[:, ROW.outcome])
+            & (np.nan_to_num(coarse[:, ROW.period]) == np.nan_to_num(fine[:, ROW.period]))
+            & (np.nan_to_num(coarse[:, ROW.chatter]) == np.nan_to_num(fine[:, ROW.chatter])))
+    error = np.where(same, np.maximum(error, 0.0), np.inf)
+    return np.where(same & (fine[:, ROW.outcome] != SEQUENCE_CYCLE), np.nan, error)
+
+
+def solve_auto(solve, cases, tol, margins=False):
+    """auto on a system without a closed form: DOPRI5 at AUTO_COARSE times the calibrated
+    rtol and AUTO_REFINE times finer, refined further where the estimate exceeds
+    AUTO_ACCEPT tol (``margins``: the cycle's margins asked for count in it). ``solve(cases,
+    method, rtol, atol, dt)``: the rows of these cases by one method. Counters add up every
+    solve."""
+    rtol = AUTO_COARSE * auto_rtol(tol)
+    coarse = solve(cases, METHOD_DOPRI5, rtol, rtol * AUTO_ATOL_PER_RTOL, 0.0)
+    rows = coarse.copy()
+    pending = np.arange(cases.shape[0])
+    for _ in range(AUTO_ROUNDS):
+        rtol /= AUTO_REFINE
+        fine = solve(cases[pending], METHOD_DOPRI5, max(rtol, 1e-14),
+                     max(rtol, 1e-14) * AUTO_ATOL_PER_RTOL, 0.0)
+        error = estimated_error(coarse, fine, margins)
+        counters = [ROW.steps, ROW.rejected, ROW.events]
+        fine[:, counters] += rows[np.ix_(pending, counters)]
+        fine[:, ROW.error] = error
+        rows[pending] = fine
+        more = (error > AUTO_ACCEPT * tol) & (rtol > 1e-14)
+        coarse, pending = fine[more], pending[more]
+        if not pending.size:
+            break
+    return rows
+
+
+#: the closed-form flight's longest step, in the pendulum's own time (at tol above 4e-6)
+EXACT_STEP_MAX = 0.2
+#: its section states repeat to 10 x this rtol (at most 1e-9), whatever tol: the flights are
+#: exact, so a tighter test costs a few sections (1-3 % of the steps), and a looser one
+#: takes a slowly drifting quasi-periodic sequence for a cycle (at rtol = tol/10 and tol
+#: 1e-6, 45 of the blade example's 306 designs, quasi-periodic at DOPRI5 rtol 1e-12,
+#: came out period_n)
+EXACT_SECTION_RTOL = 1e-10
+
+
+def exact_step_length(tol):
+    """The closed-form flight's step, in the pendulum's own time, for an accuracy tol: the
+    flow is exact, but the events are searched on a step's cubic Hermite interpolant
+    (kernels/impact/events.py), whose error is about L^4/384 of the motion's scale; L =
+    (384 tol)^(1/4) keeps it within tol, so that a contact is missed or invented only
+    within tol of grazing (docs/impact_core.md). At most EXACT_STEP_MAX: on 200 random
+    blade designs, steps of 0.5 (tol 1e-3) ended 6 more designs in another regime than
+    DOPRI5 at rtol 1e-13 than steps of 0.1-0.3 did."""
+    return min((384.0 * tol) ** 0.25, EXACT_STEP_MAX)
+
+
+def exact_settings(tol):
+    """(rtol, atol, step) of the closed-form flight for an accuracy tol: steps of
+    exact_step_length(tol), section states repeating to 10 x min(tol/10,
+    EXACT_SECTION_RTOL), and the tangent's and slides' flights, where integrated, by
+    DOPRI5 at that rtol."""
+    rtol = min(tol / 10.0, EXACT_SECTION_RTOL)
+    return rtol, rtol * AUTO_ATOL_PER_RTOL, exact_step_length(tol)
+
+
+def closed_form_estimate(rows, repeat_tol=0.0):
+    """The error_estimate of rows solved in closed form: where there is a cycle, the
+    relative error the solve allows: 0 for the rotor stop's closed form (its values are
+    exact to round-off), the section repeat tolerance ``repeat_tol`` for exact flights
+    (their cycle is accepted when its section states repeat to it, the values' only error
+    left); NaN elsewhere."""
+    return np.where(rows[:, ROW.outcome] == SEQUENCE_CYCLE, repeat_tol, np.nan)

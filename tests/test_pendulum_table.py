@@ -1,0 +1,129 @@
+"""The table of pendulum systems (kernels/pendulum/table.py) drives the entry points, the
+dispatch, the spec's rules and the docs' list; a new impact surface goes through it.
+
+The toy surface is tests/stop_tool.py's ``mirrored_stop``: the rotor stop met from the other
+side. It touches one file and a table row here, nothing in kernels/; its steady state must be
+the rotor stop's (the mirror image of every flight and contact), which the closed form gives
+independently (kernels/pendulum/closed_form.py)."""
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from numba import njit
+
+from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings
+from kernels.impact.runge_kutta import METHOD_DOPRI5
+from kernels.pendulum import dispatch, models, systems, table, tools
+from kernels.pendulum.cases import CASE_COLUMNS, N_ROW, ROW, C
+from kernels.rotary_pendulum import DECLARATION
+from tests.stop_tool import mirrored_stop
+
+#: the toy surface's row, beside the table's (a driven model: the mirror needs an odd
+#: equation)
+TOY = table.PendulumSystem("paper", "mirrored_stop", closed_form=False, exact_flow=False,
+                           slide=False, tangent=False, affine=True)
+
+
+@njit
+def mirrored_stop_data(case):
+    return 0.0, case[C.k]  # the stop at psi = 0, the rotor stop's data
+
+
+def toy_entry(model: str):
+    """The toy system's block for a model, built as the table's are, and a Python entry."""
+    row = TOY._replace(model=model)
+    block = systems.build_block(row, mirrored_stop(getattr(models, model.upper())),
+                                systems.PARAMETERS[model], mirrored_stop_data,
+                                returning=True)
+
+    @njit
+    def entry(cases, settings, rows, log):
+        block(cases, settings, rows, log)
+
+    return entry
+
+
+def cases_of(model, k, xi, kappa, r, tool="rotor_stop"):
+    values = dict(model=table.MODELS[model], k=k, xi=xi, kappa=kappa, R=r,
+                  tool=table.TOOLS[tool], tool_window=0.0, rotor_inertia_ratio=0.0,
+                  motor_slope=0.0, idle_speed=0.0)
+    return np.array([[values[c][i] if np.ndim(values[c]) else values[c]
+                      for c in CASE_COLUMNS] for i in range(len(k))])
+
+
+@pytest.mark.parametrize("model", ["paper", "rigid"])
+def test_a_toy_surface_through_the_table_is_the_rotor_stop_mirrored(model):
+    """Random designs with a periodic regime: the toy surface's steady state equals the
+    closed form of the rotor stop to 1e-8 (DOPRI5 at rtol 1e-11) and the integrated rotor
+    stop to 1e-12 (mirror images: the same steps)."""
+    rng = np.random.default_rng(36 + len(model))
+    n = 24
+    k, xi, r = rng.uniform(0.5, 3.0, n), rng.uniform(1.0, 8.0, n), rng.uniform(0.0, 0.4, n)
+    # the rigid pendulum keeps a cycle where v* = (1 + k)(1 + R)/(1 - R) stays below its
+    # escape speed 2 sqrt(kappa k)
+    kappa = (1 + k) ** 2 / (4 * k) * ((1 + r) / (1 - r)) ** 2 * rng.uniform(1.1, 3.0, n)
+    stop = cases_of(model, k, xi, kappa, r)
+    method = DECLARATION.method_record(integrator="closed_form")
+    closed = dispatch.solve_cases(stop, method)
+    cycle = closed[:, ROW.outcome] == SEQUENCE_CYCLE
+    assert cycle.sum() >= n // 3, "too few periodic designs to compare"
+    settings = Settings(method=METHOD_DOPRI5, rtol=1e-11, atol=1e-13, dt=0.0,
+                        max_steps=systems.MAX_STEPS, horizon=math.inf, max_impacts=1000,
+                        starts=1)
+    toy = np.empty((n, N_ROW))
+    toy_entry(model)(stop, settings, toy, np.empty((1, 2)))
+    builtin = dispatch.solve_system(systems.ENTRY_POINTS[table.BY_CODES[table.MODELS[model],
+                                                                          0]], stop, settings)
+    values = [ROW.amplitude, ROW.interval, ROW.speed, ROW.acceleration, ROW.frequency]
+    np.testing.assert_array_equal(toy[cycle, ROW.outcome], SEQUENCE_CYCLE)
+    np.testing.assert_allclose(toy[np.ix_(cycle, values)], closed[np.ix_(cycle, values)],
+                               rtol=1e-8)
+    np.testing.assert_allclose(toy[np.ix_(cycle, values)], builtin[np.ix_(cycle, values)],
+                               rtol=1e-12)
+    # escapes as the rotor stop does
+    np.testing.assert_array_equal(toy[~cycle, ROW.outcome], builtin[~cycle, ROW.outcome])
+
+
+def test_entry_points_and_dispatch_follow_the_table():
+    """One entry point per row, a tangent one exactly where the row says the multipliers
+    need it, each compiled function named after its row; the row's flags agree with what
+    its contact and model do."""
+    for row in table.SYSTEMS:
+        entry = systems.ENTRY_POINTS[row]
+        assert entry.py_func.__name__ == table.entry_name(row)
+        assert (row in systems.TANGENT_ENTRY_POINTS) == row.tangent
+        contact = systems.CONTACTS[row.model, row.tool]
+        model = getattr(models, row.model.upper())
+        assert (contact.pressed is not tools.never) == row.slide
+        assert contact.smooth == (row.tool == "rotor_stop")
+        assert row.affine == (contact.smooth and model.driven)
+        assert row.exact_flow == (model.exact is not None and not row.closed_form)
+        assert row.closed_form == (model.driven and row.tool == "rotor_stop")
+    assert set(table.BY_CODES) == {(table.MODELS[s.model], table.TOOLS[s.tool])
+                                   for s in table.SYSTEMS}
+    assert len(table.BY_CODES) == len(table.MODELS) * len(table.TOOLS)
+    decl = {q.name: q for q in DECLARATION.parameters}
+    assert decl["model"].choices == table.MODELS and decl["tool"].choices == table.TOOLS
+
+
+def test_the_rules_and_the_docs_list_come_from_the_table():
+    """closed_form is refused exactly where no row of the pairs asked for has one, and the
+    message names the rows that do; the docs render the table's rows."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "docs"))
+    try:
+        from hooks import pendulum_systems
+    finally:
+        sys.path.pop(0)
+    for row in table.SYSTEMS:
+        message = DECLARATION.rules({"model": {row.model}, "tool": {row.tool},
+                                     "method.integrator": {"closed_form"}})
+        assert (message is None) == (row.closed_form or row.exact_flow)
+        if message:
+            assert all(f"{s.model} on {s.tool}" in message for s in table.SYSTEMS
+                       if s.closed_form or s.exact_flow)
+    rendered = pendulum_systems()
+    for row in table.SYSTEMS:
+        assert f"| {row.model} | {row.tool} |" in rendered
