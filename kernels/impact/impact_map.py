@@ -32,12 +32,16 @@ a section, the transient and its accelerators, the refined cycle, the whole sequ
 5. the steady cycle is run once more with ``refine`` (turning points and peaks polished),
    which gives the outputs;
 6. the budget ``max_impacts``: without a cycle, not periodic where the map has stopped
-   contracting, else max_steps;
+   contracting, else max_steps; not periodic already at a checkpoint (a power of two of
+   sections) where the steps between sections have stopped shrinking by more than the
+   budget's verdict allows (settles_nowhere), so that a quasi-periodic or chaotic
+   sequence does not fly the whole budget;
 7. with ``stability``, the refined run of the cycle also carries the tangent of the section
    map (tangent.py) for its leading multiplier, and every cycle reports its margins: the
    slowest and fastest impact, and the smallest distance of an impact from the tool's edge;
 8. ``start`` picks the starting state (0: at rest, the tool's ``first``; others for the
-   attractor count).
+   attractor count); a sequence that reaches a section state of a cycle in ``known``
+   (those other starts found, known_attractor) stops there as that cycle.
 """
 
 import math
@@ -59,6 +63,11 @@ MAX_PERIOD = 8
 PERIOD_SEPARATION = 1000.0  # see classify_period
 MAX_CONTACTS_PER_SECTION = 200  # a chatter sequence longer than this is not a cycle
 IMPACTS_COUNTED = 100000  # the longest transient counted past a jump
+#: two section states are one attractor's when they agree to this (relative to max(1, |x|))
+ATTRACTOR_TOL = 1e-6
+#: the columns of a row of known cycles (``known``): how its sequence ended, its period, 1
+#: if it chatters, and from KNOWN.key on its section state
+KNOWN = namedtuple("KnownColumns", ["outcome", "period", "chatter", "key"])(0, 1, 2, 3)
 
 #: what a sequence returns: its outcome (outcomes.SEQUENCE_*), the cycle's period and
 #: whether it accumulates a chatter, and over the cycle the amplitude, the free-flight time,
@@ -268,6 +277,114 @@ def aitken_jump(history, last):
     geometric tail removed from the last three sections of a converged sequence."""
     return (aitken(history[last - 2, 0], history[last - 1, 0], history[last, 0]),
             aitken(history[last - 2, 1], history[last - 1, 1], history[last, 1]))
+
+
+@njit(**KERNEL_OPTIONS)
+def known_attractor(known, key):
+    """The row of ``known`` (columns KNOWN) whose cycle's section state ``key`` is, to
+    ATTRACTOR_TOL; -1 if none. Rows of sequences that ended without a cycle never
+    match."""
+    for a in range(known.shape[0]):
+        if known[a, KNOWN.outcome] != SEQUENCE_CYCLE:
+            continue
+        same = True
+        for i in range(len(key)):
+            state = known[a, KNOWN.key + i]
+            if abs(state - key[i]) > ATTRACTOR_TOL * max(1.0, abs(state)):
+                same = False
+                break
+        if same:
+            return a
+    return -1
+
+
+@njit(**INLINE_OPTIONS)
+def ended(steady, count, t, y, data, acceleration):
+    """A transient that ended with its result ``steady`` already (no cycle, the constant
+    map's, a known one's)."""
+    return Transient(ended=bool(True), steady=steady, count=count, period=int(0), t=t, y=y,
+                     data=data, cost=steady.cost, acceleration=acceleration,
+                     jumped=bool(False))
+
+
+@njit(**INLINE_OPTIONS)
+def on_known(cycle, key, impacts, cost):
+    """The Steady of a sequence that reached the section state ``key`` of a known cycle
+    (``cycle``: a row of known cycles, columns KNOWN): its outcome, period and chatter;
+    its values are that cycle's, not computed again."""
+    return Steady(outcome=SEQUENCE_CYCLE, period=int(cycle[KNOWN.period]),
+                  chatter=cycle[KNOWN.chatter] > 0.0,
+                  amplitude=0.0, flight_time=0.0, rotor_angle=0.0, elapsed=0.0, speed=0.0,
+                  peak=0.0, impacts=impacts, cost=cost, margins=NO_MARGINS, key=key)
+
+
+#: an early verdict needs the weighted Birkhoff averages of the section states over the
+#: last two quarters to agree to this, relative to the states' spread
+BIRKHOFF_AGREEMENT = 1e-6
+
+
+@njit(**KERNEL_OPTIONS)
+def birkhoff_average(history, first, last, i):
+    """The weighted Birkhoff average of component i of rows first .. last - 1 of
+    ``history``, weights exp(-1/(s (1 - s))) at s = (j + 1/2)/(last - first) (Das, Saiki,
+    Sander and Yorke, Nonlinearity 30, 2017): on a quasi-periodic orbit it converges faster
+    than any power of the length, on a chaotic one like its square root."""
+    total = weights = 0.0
+    for j in range(first, last):
+        s = (j - first + 0.5) / (last - first)
+        w = math.exp(-1.0 / (s * (1.0 - s)))
+        total += w * history[j, i]
+        weights += w
+    return total / weights
+
+
+@njit(**KERNEL_OPTIONS)
+def settles_nowhere(history, count, settings, repeat_tol):
+    """The early verdict "not periodic" for a quasi-periodic sequence, at section counts n
+    that are powers of two from settings.verdict_from, below the budget N =
+    settings.max_impacts. Over the last half of the sequence, split into two quarters:
+    (1) each component's weighted Birkhoff averages over the quarters agree to
+    BIRKHOFF_AGREEMENT of its spread (a quasi-periodic orbit, or a periodic one; a chaotic
+    one's agree to about 1e-2: it flies the budget, as it may still end without an
+    impact, as 3 of 120 random blade designs did); (2) for every period p <= MAX_PERIOD,
+    the differences of states p sections apart (relative, as classify_period takes them)
+    stay above 1000 repeat_tol, and over the last quarter are, on average and at their
+    largest, at least 0.1^(n/(4N)) of those over the quarter before: no cycle is near (9
+    designs of the stability example, converging slowly to a period-n cycle, passed (1)
+    and the steps of p = 1 alone). A transient whose differences shrink geometrically by
+    rho a section passes (2) only where rho >= 0.1^(1/N), which the budget's own verdict
+    (not_periodic: the step at N over a tenth of the one at N/2, rho > 0.1^(2/N)) calls
+    not periodic too."""
+    n, budget = count, settings.max_impacts
+    if settings.verdict_from <= 0 or n < settings.verdict_from or n >= budget or (
+            n & (n - 1)) != 0:
+        return False
+    quarter = n // 4
+    for i in range(history.shape[1]):
+        spread = 0.0
+        for j in range(n - 2 * quarter, n):
+            spread = max(spread, abs(history[j, i] - history[n - 1, i]))
+        drift = abs(birkhoff_average(history, n - 2 * quarter, n - quarter, i)
+                    - birkhoff_average(history, n - quarter, n, i))
+        if not drift <= BIRKHOFF_AGREEMENT * spread:
+            return False
+    floor = 0.1 ** (n / (4.0 * budget))
+    for p in range(1, MAX_PERIOD + 1):
+        mean, largest, smallest = np.zeros(2), np.zeros(2), math.inf
+        for half in range(2):
+            for j in range(n - (2 - half) * quarter, n - (1 - half) * quarter):
+                step = 0.0
+                for i in range(history.shape[1]):
+                    step = max(step, abs(history[j, i] - history[j - p, i])
+                               / max(1.0, abs(history[j, i])))
+                mean[half] += step / quarter
+                largest[half] = max(largest[half], step)
+                if half == 1:
+                    smallest = min(smallest, step)
+        if not (smallest > 1000.0 * repeat_tol and mean[1] >= floor * mean[0]
+                and largest[1] >= floor * largest[0]):
+            return False
+    return True
 
 
 @njit(**KERNEL_OPTIONS)
@@ -538,35 +655,59 @@ def make_accelerators(c):
     return land, fixed_point, broyden
 
 
-def make_transient(c, jump_early, section):
-    """The transient of a Contact: ``transient(p, data, r, settings, repeat_tol, log, t, y,
-    history) -> Transient``, sections from (t, y) until p of them repeat (``history``
-    holds their states), accelerated where the map allows it: on an affine map (
-    ``jump_early``) by Aitken's jump from the start and two sections (aitken_jump), on
-    another smooth map with a 2-D section by fixed-point jumps and Broyden's steps
-    (make_accelerators)."""
-    key_of, striker_speed, rotor_angle = c.key, c.striker_speed, c.model.rotor_angle
-    psi_of, smooth = c.model.psi, c.smooth
-    land, fixed_point, broyden = make_accelerators(c)
+def make_record(c):
+    """``record(t, y, data, p, history, row, log) -> key``: a section's state into row
+    ``row`` of ``history``, and its rotor angle (mod 2 pi) and psi into ``log`` (its last
+    row takes any beyond)."""
+    key_of, rotor_angle, psi_of = c.key, c.model.rotor_angle, c.model.psi
 
     @njit(**INNER_OPTIONS)
-    def transient(p, data, r, settings, repeat_tol, log, t, y, history):
+    def record(t, y, data, p, history, row, log):
+        key = key_of(t, y, data, p)
+        for i in range(len(key)):
+            history[row, i] = key[i]
+        slot = min(row, log.shape[0] - 1)
+        log[slot, 0], log[slot, 1] = rotor_angle(t, y) % (2.0 * math.pi), psi_of(y)
+        return key
+
+    return record
+
+
+def make_transient(c, jump_early, section):
+    """The transient of a Contact: ``transient(p, data, r, settings, repeat_tol, log, t, y,
+    history, known) -> Transient``, sections from (t, y) until p of them repeat
+    (``history`` holds their states), one is on a cycle of ``known`` (known_attractor),
+    or the sequence settles nowhere (settles_nowhere); accelerated where the map allows
+    it: on an affine map (``jump_early``) by Aitken's jump from the start and two
+    sections (aitken_jump), on another smooth map with a 2-D section by fixed-point jumps
+    and Broyden's steps (make_accelerators)."""
+    key_of, striker_speed, rotor_angle = c.key, c.striker_speed, c.model.rotor_angle
+    smooth = c.smooth
+    land, fixed_point, broyden = make_accelerators(c)
+    record = make_record(c)
+
+    @njit(**INNER_OPTIONS)
+    def transient(p, data, r, settings, repeat_tol, log, t, y, history, known):
         no_tangent = np.empty((5, 0))  # the transient's sections carry no tangent
         smooth_2d = not jump_early and smooth and history.shape[1] == 2
         a = Acceleration(jumped_at=1, secant=False, converged=False, jac=(0.0, 0.0, 0.0, 0.0),
                          x_secant=(0.0, 0.0), f_secant=(0.0, 0.0), t_orbit=t, y_orbit=y,
                          first_jump=0, x_rest=(0.0, 0.0))
-        count = period = 0
-        cost, jumped = NO_COST, False
+        # int(): a literal 0 would compile record for the literal too (kernels/__init__.py)
+        count, period, cost, jumped = int(0), int(0), NO_COST, False
         speculative = no_cycle(SEQUENCE_MAX_STEPS, False, 0, NO_COST, key_of(t, y, data, p))
         while count <= settings.max_impacts:
-            key = key_of(t, y, data, p)
-            for i in range(len(key)):
-                history[count, i] = key[i]
-            slot = min(count, log.shape[0] - 1)
-            log[slot, 0], log[slot, 1] = rotor_angle(t, y) % (2.0 * math.pi), psi_of(y)
+            key = record(t, y, data, p, history, count, log)
             count += 1
+            hit = known_attractor(known, key)
             period = classify_period(history, count, repeat_tol, MAX_PERIOD)
+            # on a cycle found before: that attractor (its values are known); or, away from
+            # the accelerators' jumps, a sequence as not periodic as its budget would find it
+            if hit >= 0 or (period == 0 and not a.secant and 2 * a.jumped_at < count
+                            and settles_nowhere(history, count, settings, repeat_tol)):
+                return ended(on_known(known[hit], key, count, cost) if hit >= 0 else no_cycle(
+                    SEQUENCE_NOT_PERIODIC, False, settings.max_impacts, cost, key),
+                    count, t, y, data, a)
             # right after a transient jump, one section more: Aitken at the end needs three
             # sections of the map's own (a jumped state's section repeats it only to tol)
             if period > 0 and not (a.jumped_at > 1 and count < a.jumped_at + 2):
@@ -589,10 +730,8 @@ def make_transient(c, jump_early, section):
             s = section(t, y, data, p, r, settings, refine, no_tangent, int(0))
             cost = add(cost, s.cost)
             if s.outcome != SEQUENCE_CYCLE:
-                return Transient(ended=bool(True), steady=no_cycle(
-                    s.outcome, s.chatter, count, cost, key_of(t, y, data, p)), count=count,
-                    period=int(0), t=t, y=y,
-                    data=data, cost=cost, acceleration=a, jumped=jumped)
+                return ended(no_cycle(s.outcome, s.chatter, count, cost,
+                                      key_of(t, y, data, p)), count, t, y, data, a)
             t, y, data = s.t, s.y, s.data
             if refine:
                 # one impact a cycle on a smooth map: no edge, the multiplier in closed form
@@ -604,16 +743,14 @@ def make_transient(c, jump_early, section):
                     margins=Margins(speed, speed, math.inf, math.nan, math.nan),
                     key=key_of(t, y, data, p))
             if constant:
-                return Transient(ended=bool(True), steady=Steady(
+                return ended(Steady(
                     outcome=SEQUENCE_CYCLE, period=1, chatter=s.chatter,
                     amplitude=s.amplitude, flight_time=s.flight_time,
                     rotor_angle=speculative.rotor_angle, elapsed=speculative.elapsed,
                     speed=striker_speed(t, y, data, p), peak=s.peak, impacts=1, cost=cost,
-                    margins=speculative.margins, key=speculative.key), count=count,
-                    period=int(1), t=t, y=y, data=data, cost=cost, acceleration=a,
-                    jumped=jumped)
-        return Transient(ended=bool(False), steady=speculative, count=count, period=period, t=t, y=y,
-                         data=data, cost=cost, acceleration=a, jumped=jumped)
+                    margins=speculative.margins, key=speculative.key), count, t, y, data, a)
+        return Transient(ended=bool(False), steady=speculative, count=count, period=period, t=t,
+                         y=y, data=data, cost=cost, acceleration=a, jumped=jumped)
 
     return transient
 
@@ -624,14 +761,16 @@ def make_steady(c, jump_early, transient, cycle):
     first, key_of, from_key, smooth = c.first, c.key, c.from_key, c.smooth
 
     @njit(**INNER_OPTIONS)
-    def steady(p, data0, r, settings, repeat_tol, log, start):
+    def steady(p, data0, r, settings, repeat_tol, log, start, known):
         """The sequence from starting state number ``start`` (0: at rest, the tool's
         ``first``) to its steady cycle, within settings.max_impacts, its cycle's section
         states repeating to ``repeat_tol``; log[j] gets (rotor angle mod 2 pi, psi) at
-        section j (the last row takes any beyond)."""
+        section j (the last row takes any beyond). It stops at a section state of a cycle
+        in ``known`` (known_attractor), and reports that cycle's outcome, period, chatter
+        and this section state, without its values."""
         t, y, data = first(p, data0, start)
         history = np.empty((settings.max_impacts + 2, len(key_of(t, y, data, p))))
-        tr = transient(p, data, r, settings, repeat_tol, log, t, y, history)
+        tr = transient(p, data, r, settings, repeat_tol, log, t, y, history, known)
         if tr.ended:
             return tr.steady
         count, period, a, cost = tr.count, tr.period, tr.acceleration, tr.cost

@@ -20,9 +20,12 @@ NO_COST = Counters(0, 0, 0)
 #: the settings of a solve, by the names the spec gives them: the method
 #: (runge_kutta.METHOD_*), its tolerances, the fixed step (RK4's ``dt``, or the exact flow's
 #: step), a flight's step budget and horizon (in the flight's time), and for an impact
-#: sequence its budget of impacts and the starting states per case
+#: sequence its budget of impacts, the starting states per case, and the first section
+#: count at which it may be called not periodic before its budget (impact_map.settles_nowhere;
+#: 0: only at the budget)
 Settings = namedtuple("Settings", ["method", "rtol", "atol", "dt", "max_steps", "horizon",
-                                   "max_impacts", "starts"], defaults=(1000, 1))
+                                   "max_impacts", "starts", "verdict_from"],
+                      defaults=(1000, 1, 64))
 
 
 @njit(**INNER_OPTIONS)

@@ -12,8 +12,8 @@ import math
 import numpy as np
 from numba import njit
 
-from kernels import KERNEL_OPTIONS, INNER_OPTIONS
-from kernels.impact.impact_map import make_impact_map
+from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
+from kernels.impact.impact_map import ATTRACTOR_TOL, KNOWN, make_impact_map
 from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings, add
 from kernels.impact.runge_kutta import METHOD_RK4
 from kernels.pendulum import models, tools
@@ -58,9 +58,10 @@ def lab_window_data(case):
     return (-tools.TWO_PI, case[C.tool_window], case[C.k], 0.0, 1.0)
 
 
-#: two starting states reach the same attractor when their cycles' outcome, period and
-#: chatter agree and their section states agree to this (relative)
-ATTRACTOR_TOL = 1e-6
+
+
+#: the longest section state of a tool (the blade's: psi, the gap's rate, the rotor speed)
+MAX_KEY = 3
 
 
 def make_block(contact, jump_early, parameters, data_of, frequency, stability=False):
@@ -78,29 +79,26 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     def block(cases, settings, rows, log):
         repeat_tol = section_repeat_tol(settings.method, settings.rtol)
         starts = settings.starts
+        # per start: its steady state in the columns of impact_map.KNOWN
+        seen = np.empty((starts, KNOWN.key + MAX_KEY))
         for c in range(cases.shape[0]):
             case = cases[c]
             row = rows[c]
             for j in range(row.shape[0]):
                 row[j] = math.nan
             p, data, r = parameters(case), data_of(case), case[C.R]
-            s = steady(p, data, r, settings, repeat_tol, log, int(0))
+            s = steady(p, data, r, settings, repeat_tol, log, int(0), seen[:0])
             row[ROW.outcome] = s.outcome
             cost = s.cost
             if starts > 1:
                 n_keys = len(s.key)
-                seen = np.empty((starts, 3 + n_keys))
-                seen[0, 0], seen[0, 1], seen[0, 2] = s.outcome, s.period, 1.0 if s.chatter else 0.0
-                for i in range(n_keys):
-                    seen[0, 3 + i] = s.key[i]
+                remember(seen, int(0), s)
                 distinct, same = int(1), int(1)
                 for j in range(1, starts):
-                    other = steady(p, data, r, settings, repeat_tol, log, j)
+                    # a start stops on a cycle another start found: the same attractor
+                    other = steady(p, data, r, settings, repeat_tol, log, j, seen[:distinct])
                     cost = add(cost, other.cost)
-                    seen[distinct, 0], seen[distinct, 1] = other.outcome, other.period
-                    seen[distinct, 2] = 1.0 if other.chatter else 0.0
-                    for i in range(n_keys):
-                        seen[distinct, 3 + i] = other.key[i]
+                    remember(seen, distinct, other)
                     if _same_attractor(seen, int(0), distinct, n_keys):
                         same += 1
                     new = True
@@ -136,17 +134,25 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     return block
 
 
+@njit(**INLINE_OPTIONS)
+def remember(seen, j, s):
+    """A start's Steady ``s`` into row j of ``seen`` (columns impact_map.KNOWN)."""
+    seen[j, KNOWN.outcome], seen[j, KNOWN.period] = s.outcome, s.period
+    seen[j, KNOWN.chatter] = 1.0 if s.chatter else 0.0
+    for i in range(len(s.key)):
+        seen[j, KNOWN.key + i] = s.key[i]
+
+
 @njit(**KERNEL_OPTIONS)
 def _same_attractor(seen, a, b, n_keys):
-    """Rows a and b of ``seen`` (outcome, period, chatter, section state): the same
-    attractor? A sequence that ends without a cycle (escape, no impact, ...) is one
-    attractor per outcome."""
-    for i in range(3):
+    """Rows a and b of ``seen`` (columns impact_map.KNOWN): the same attractor? A sequence
+    that ends without a cycle (escape, no impact, ...) is one attractor per outcome."""
+    for i in range(KNOWN.key):
         if seen[a, i] != seen[b, i]:
             return False
-    if seen[a, 0] != SEQUENCE_CYCLE:
+    if seen[a, KNOWN.outcome] != SEQUENCE_CYCLE:
         return True
-    for i in range(3, 3 + n_keys):
+    for i in range(KNOWN.key, KNOWN.key + n_keys):
         if abs(seen[a, i] - seen[b, i]) > ATTRACTOR_TOL * max(1.0, abs(seen[a, i])):
             return False
     return True
@@ -160,6 +166,9 @@ CONTACTS = {(s.model, s.tool): getattr(tools, s.tool)(getattr(models, s.model.up
             for s in SYSTEMS}
 #: a flight's step budget
 MAX_STEPS = 10 ** 6
+#: the first section count at which a sequence may be called not periodic before its
+#: budget of impacts (impact_map.settles_nowhere)
+VERDICT_FROM = 64
 
 
 def build_block(system, contact, parameters, data_of, stability=False, returning=None):
@@ -200,4 +209,5 @@ def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1):
     return Settings(method=int(method), rtol=float(rtol), atol=float(atol), dt=float(dt),
                     max_steps=MAX_STEPS,
                     horizon=float(CONTACTS[system.model, system.tool].horizon),
-                    max_impacts=int(max_impacts), starts=int(starts))
+                    max_impacts=int(max_impacts), starts=int(starts),
+                    verdict_from=VERDICT_FROM)
