@@ -5,7 +5,8 @@ the child), after one run of each that fills its own numba cache. Then the two a
 the last round, variable by variable: identical, or how many values differ.
 
 Run: .venv/bin/python benchmarks/bench_against.py EXAMPLE --against DIR [--rounds N]
-     [--set KEY=VALUE ...]  (writes benchmarks/results/against_EXAMPLE.json)
+     [--set KEY=VALUE ...] [--label WHAT]
+     (writes benchmarks/results/against_EXAMPLE[_WHAT][_SETTINGS].json)
 
 ``--set`` changes the example's spec (``method.starts=1``), for the same comparison at
 another setting.
@@ -79,6 +80,7 @@ def main() -> None:
     parser.add_argument("--against", required=True, metavar="DIR")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    parser.add_argument("--label", default="", help="what changed: names the result file")
     args = parser.parse_args()
     here, there = str(HERE.parent), str(Path(args.against).resolve())
     text = subprocess.run([SWEEP, "examples", args.example], check=True,
@@ -97,7 +99,7 @@ def main() -> None:
                 times[tree].append(cpu_run(spec, outs[tree], tree, caches[tree]))
         diff = differences(outs[here], outs[there])
     this, other = statistics.median(times[here]), statistics.median(times[there])
-    record = {"example": args.example, "set": args.set, "against": there,
+    record = {"example": args.example, "label": args.label, "set": args.set, "against": there,
               "rounds": args.rounds, "machine": platform.node(),
               "this_cpu_s": times[here], "other_cpu_s": times[there],
               "median_this_cpu_s": this, "median_other_cpu_s": other,
@@ -106,7 +108,7 @@ def main() -> None:
           f"CPU s (median of {args.rounds}): {other / this:.2f}x faster")
     for name, verdict in diff.items():
         print(f"  {name}: {verdict}")
-    suffix = "_".join(s.replace("=", "-") for s in args.set)
+    suffix = re.sub(r"[^\w.]+", "-", "_".join([args.label] + args.set)).strip("-_")
     name = f"against_{args.example}" + (f"_{suffix}" if suffix else "") + ".json"
     (HERE / "results" / name).write_text(json.dumps(record, indent=2) + "\n")
 

@@ -18,8 +18,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.auto_cases import errors, points, run  # noqa: E402
-from benchmarks.timing import best_time  # noqa: E402
+from benchmarks.auto_cases import cost, errors, points, run  # noqa: E402
+from benchmarks.timing import best_time, paired_cpu_times  # noqa: E402
+from kernels.pendulum import accuracy  # noqa: E402
 
 
 def candidates(tol):
@@ -30,6 +31,23 @@ def candidates(tol):
                    dict(integrator="dopri5", rtol=rtol, atol_per_rtol=atol_per_rtol))
     for dt in 0.4 / 2.0 ** np.arange(10):
         yield f"rk4 dt {dt:.3g}", dict(integrator="rk4", dt=dt)
+
+
+def against_one_solve(params, ref, tol):
+    """auto against one DOPRI5 solve from rest at auto's finer rtol, the accuracy auto
+    delivers: right-hand sides (deterministic) and CPU time (median of interleaved rounds),
+    and the worst errors of both against the reference."""
+    finer = accuracy.AUTO_COARSE * accuracy.auto_rtol(tol) / accuracy.AUTO_REFINE
+    one = dict(integrator="dopri5", rtol=finer, atol_per_rtol=accuracy.AUTO_ATOL_PER_RTOL)
+    out, _ = run(params, "auto", tol=tol)
+    single, _ = run(params, **one)
+    t_auto, t_one = paired_cpu_times(lambda: run(params, "auto", tol=tol),
+                                     lambda: run(params, **one))
+    return {"one_solve": f"dopri5 rtol {finer:.2g}",
+            "auto_over_one_evaluations": cost(out, "dopri5") / cost(single, "dopri5"),
+            "auto_over_one_cpu": t_auto / t_one,
+            "auto_error": float(np.max(errors(out, ref))),
+            "one_error": float(np.max(errors(single, ref)))}
 
 
 def main():
@@ -56,6 +74,8 @@ def main():
             result[f"{model} tol {tol:g}"] = {"auto_s": t_auto, "best": best_name,
                                                "best_s": best_t, "auto_over_best": t_auto
                                                / best_t}
+            if model == "rotor":
+                result[f"{model} tol {tol:g}"].update(against_one_solve(params, ref, tol))
             print(f"{model:6s} tol {tol:g}: auto {t_auto * 1e3:7.2f} ms, best single "
                   f"{best_name} {best_t * 1e3:7.2f} ms, ratio {t_auto / best_t:.2f}")
     Path(__file__).resolve().parent.joinpath("results", "auto.json").write_text(

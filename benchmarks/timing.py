@@ -26,3 +26,17 @@ def paired_times(a, b, repeats: int = 11) -> tuple[float, float]:
             fn()
             times.append(time.perf_counter() - t)
     return min(ta), min(tb)
+
+
+def paired_cpu_times(a, b, repeats: int = 5) -> tuple[float, float]:
+    """Median CPU times (this process: user + system) of a and b run in turn (A B B A ...),
+    after one warm-up each: CPU time, not wall time, since a loaded machine stretches the
+    wall clock of one and not the other."""
+    a(), b()
+    ta, tb = [], []
+    for i in range(repeats):
+        for fn, times in ((a, ta), (b, tb)) if i % 2 == 0 else ((b, tb), (a, ta)):
+            t = time.process_time()
+            fn()
+            times.append(time.process_time() - t)
+    return sorted(ta)[len(ta) // 2], sorted(tb)[len(tb) // 2]

@@ -181,7 +181,8 @@ DECLARATION = Mechanism(
                "values (the largest over amplitude, frequency ratio, period, impact speed "
                "and interval, acceleration peak, rotor speed ratio, and where asked for the "
                "leading multiplier, impact_speed_min_ratio and edge_margin), from two "
-               "DOPRI5 solves 8 times apart in rtol; 0 by the rotor stop's closed form "
+               "DOPRI5 solves 8 times apart in rtol (the finer one going on from the "
+               "other's cycle); 0 by the rotor stop's closed form "
                "(exact to round-off); on the blade's exact flights (auto, closed_form) the "
                "tolerance the cycle's section states repeat to (1e-9 at tol >= 1e-9); inf "
                "where the two solves reach different regimes; NaN with a fixed integrator "
@@ -197,8 +198,8 @@ DECLARATION = Mechanism(
     method=(
         Quantity("integrator", "1", "auto (the closed form where the model has one: the "
                  "paper and rigid models on the rotor stop, the rigid model's flights on the "
-                 "blade; else DOPRI5 twice, 8 times apart in rtol, the finer solve reported "
-                 "with its error_estimate and refined where that exceeds tol/10), "
+                 "blade; else DOPRI5 to the cycle, and on from it 8 times finer in rtol, "
+                 "the finer solve reported with its error_estimate and refined where that exceeds tol/10), "
                  "closed_form (only where there is one), rk4 or dopri5",
                  default="auto",
                  choices={"auto": INTEGRATOR_AUTO, "closed_form": INTEGRATOR_CLOSED,

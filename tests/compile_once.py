@@ -57,7 +57,8 @@ def main(examples):
     # one case, two starts: the plain and the tangent-carrying paths of the driver
     system = BY_CODES[1, 1]  # the rigid model on the blade
     systems.rigid_on_lab_window_tangent(
-        cases, systems.settings_for(system, 1, 1e-6, 1e-9, 0.01, 5, 2), rows, log)
+        cases, systems.settings_for(system, 1, 1e-6, 1e-9, 0.01, 5, 2), rows,
+        np.empty_like(rows), log)
     print(json.dumps([calls for calls in compiled.values() if len(calls) > 1]))
 
 

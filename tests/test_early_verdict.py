@@ -83,7 +83,7 @@ def test_the_early_verdict_is_stricter_than_the_budgets():
         assert not any(settles_nowhere(henon(), n, settings, 1e-9) for n in checkpoints)
         assert not any(settles_nowhere(to_a_three_cycle(0.99), n, settings, 1e-9)
                        for n in checkpoints)
-        off = Settings(*settings[:-1], verdict_from=0)
+        off = settings._replace(verdict_from=0)
         assert not any(settles_nowhere(quasi, n, off, 1e-9) for n in checkpoints)
 
 

@@ -467,3 +467,31 @@ def test_impacts_past_a_jump_are_counted_like_the_plain_iteration_on_affine_maps
         counted = impacts_past_jump(tuple((m - np.eye(2)).ravel()), 3, tuple(rows[3]),
                                     tuple(fixed), tol, 100000)
         assert counted == n - 1, (trial, counted, n - 1)
+
+
+def test_a_failed_fixed_point_jump_keeps_the_secant_jacobian():
+    """The transient's ``fixed_point`` accelerator (make_accelerators): where the affine
+    jump fails (here: no difference between the last sections), the sequence goes on
+    without a jump and keeps the last secant Jacobian, which impacts_past_jump counts the
+    impacts from rest on (it was reset to zero, and a rotor-stop design whose later jump
+    failed counted its transient as over at the first jump)."""
+    from kernels.impact.impact_map import Acceleration, make_accelerators
+    from kernels.pendulum import systems
+
+    contact = systems.CONTACTS["rotor", "rotor_stop"]
+    inner, first = make_accelerators(contact)[1], contact.first
+
+    @njit
+    def fails_to_jump(p, data, jac, history):  # inner functions have no Python wrapper
+        t, y, data = first(p, data, 0)
+        a = Acceleration(jumped_at=2, secant=False, converged=False, jac=jac,
+                         x_secant=(0.0, 0.0), f_secant=(0.0, 0.0), t_orbit=t, y_orbit=y,
+                         first_jump=2, x_rest=(0.3, 0.4))
+        after, t1, y1 = inner(a, history, 6, t, y, data, p)
+        return after.jac, after.jumped_at, t1 == t and y1 == y
+
+    case = np.array([2.0, 4.0, 0.0, 1.2, 0.0, 0.0, 0.0, 100.0, 100.0, 1.0])
+    jac = (-0.5, 0.1, 0.2, -0.7)
+    history = np.ones((8, 2))  # four equal sections: no affine map through them
+    assert fails_to_jump(systems.rotor_parameters(case), systems.rotor_stop_data(case), jac,
+                         history) == (jac, 2, True)

@@ -57,7 +57,7 @@ def section_log(sections, rtol=1e-11, atol=None, exact_tol=None, **design):
     else:
         settings = settings_for(system, METHOD_DOPRI5, rtol,
                                 rtol * 1e-2 if atol is None else atol, 0.002, sections - 1)
-    ENTRY_POINTS[system](case, settings, rows, log)
+    ENTRY_POINTS[system](case, settings, rows, np.empty_like(rows), log)
     return log
 
 

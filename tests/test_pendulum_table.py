@@ -40,8 +40,8 @@ def toy_entry(model: str):
                                 returning=True)
 
     @njit
-    def entry(cases, settings, rows, log):
-        block(cases, settings, rows, log)
+    def entry(cases, settings, rows, first_rows, log):
+        block(cases, settings, rows, first_rows, log)
 
     return entry
 
@@ -74,7 +74,7 @@ def test_a_toy_surface_through_the_table_is_the_rotor_stop_mirrored(model):
                         max_steps=systems.MAX_STEPS, horizon=math.inf, max_impacts=1000,
                         starts=1)
     toy = np.empty((n, N_ROW))
-    toy_entry(model)(stop, settings, toy, np.empty((1, 2)))
+    toy_entry(model)(stop, settings, toy, np.empty_like(toy), np.empty((1, 2)))
     builtin = dispatch.solve_system(systems.ENTRY_POINTS[table.BY_CODES[table.MODELS[model],
                                                                           0]], stop, settings)
     values = [ROW.amplitude, ROW.interval, ROW.speed, ROW.acceleration, ROW.frequency]

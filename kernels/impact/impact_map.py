@@ -2,7 +2,8 @@
 
 ``make_impact_map(contact, jump_early)`` specialises the driver to a ``Contact``
 (kernels/impact/__init__.py) and returns a ``Driver`` whose ``steady(p, data, r, settings,
-repeat_tol, log, start) -> Steady`` runs a sequence (one factory each: the law, a contact,
+repeat_tol, log, start, known) -> (Steady, t, y, data)`` runs a sequence (``settle`` the
+same from a given state: the second stage of auto goes on from the first one's cycle) (one factory each: the law, a contact,
 a section, the transient and its accelerators, the refined cycle, the whole sequence):
 
 1. a contact: Newton's law on the normal speed along the contact Jacobian, through the
@@ -83,8 +84,9 @@ Steady = namedtuple("Steady", ["outcome", "period", "chatter", "amplitude", "fli
 #: leading multiplier (modulus, argument; NaN unless the tangent was carried)
 Margins = namedtuple("Margins", ["speed_min", "speed_max", "edge", "modulus", "angle"])
 NO_MARGINS = Margins(math.nan, math.nan, math.nan, math.nan, math.nan)
-#: the driver's functions: the whole sequence, one section, one contact, Newton's law
-Driver = namedtuple("Driver", ["steady", "section", "contact", "restitute"])
+#: the driver's functions: the whole sequence from a start and from a state, one section,
+#: one contact, Newton's law
+Driver = namedtuple("Driver", ["steady", "settle", "section", "contact", "restitute"])
 #: the refined steady cycle (``cycle``): its outcome, chatter, amplitude, free-flight time,
 #: rotor angle and time elapsed, summed striker speed at its sections, peak acceleration,
 #: how far its section state is from repeating after the period (``residual``), its cost,
@@ -418,6 +420,15 @@ def of_cycle(period, c, impacts, cost):
                   impacts=impacts, cost=cost, margins=c.margins, key=c.key)
 
 
+@njit(**INLINE_OPTIONS)
+def with_cost(s, impacts, cost):
+    """The Steady ``s`` with its impacts from the start and its cost replaced (a sequence
+    solved in stages: the impacts one stage counted, the cost of all)."""
+    if s.outcome != SEQUENCE_CYCLE:
+        return no_cycle(s.outcome, s.chatter, impacts, cost, s.key)
+    return of_cycle(s.period, s, impacts, cost)
+
+
 def make_impact_map(c, jump_early, stability=False):
     """The driver of a Contact (see the module docstring); with ``stability`` the steady
     cycle also carries the tangent of the section map (tangent.py) for its multipliers."""
@@ -427,8 +438,9 @@ def make_impact_map(c, jump_early, stability=False):
     section = make_section(c, contact, tracker)
     cycle = make_cycle(c, section, tracker)
     transient = make_transient(c, jump_early, section)
-    steady = make_steady(c, jump_early, transient, cycle)
-    return Driver(steady=steady, section=section, contact=contact, restitute=restitute)
+    steady, settle = make_steady(c, jump_early, transient, cycle)
+    return Driver(steady=steady, settle=settle, section=section, contact=contact,
+                  restitute=restitute)
 
 
 def make_restitute(c):
@@ -614,9 +626,9 @@ def make_accelerators(c):
     @njit(**INNER_OPTIONS)
     def fixed_point(a, history, count, t, y, data, p):
         jump, x, jac = fixed_point_jump(history, count)
-        if not jump:  # the secant Jacobian is reset all the same (impacts_past_jump)
+        if not jump:  # the last secant Jacobian stays (impacts_past_jump counts on it)
             return (Acceleration(jumped_at=a.jumped_at, secant=a.secant, converged=a.converged,
-                                 jac=jac, x_secant=a.x_secant, f_secant=a.f_secant,
+                                 jac=a.jac, x_secant=a.x_secant, f_secant=a.f_secant,
                                  t_orbit=a.t_orbit, y_orbit=a.y_orbit,
                                  first_jump=a.first_jump, x_rest=a.x_rest), t, y)
         x_from = (history[count - 1, 0], history[count - 1, 1])
@@ -757,22 +769,24 @@ def make_transient(c, jump_early, section):
 
 def make_steady(c, jump_early, transient, cycle):
     """The whole sequence of a Contact: ``steady(p, data, r, settings, repeat_tol, log,
-    start) -> Steady`` (see the module docstring)."""
+    start, known) -> (Steady, t, y, data)`` from a starting state (see the module
+    docstring), and ``settle(p, data, r, settings, repeat_tol, log, t, y, known)`` the
+    same from the state (t, y, data); each also returns the state its cycle ran from."""
     first, key_of, from_key, smooth = c.first, c.key, c.from_key, c.smooth
 
     @njit(**INNER_OPTIONS)
-    def steady(p, data0, r, settings, repeat_tol, log, start, known):
-        """The sequence from starting state number ``start`` (0: at rest, the tool's
-        ``first``) to its steady cycle, within settings.max_impacts, its cycle's section
-        states repeating to ``repeat_tol``; log[j] gets (rotor angle mod 2 pi, psi) at
-        section j (the last row takes any beyond). It stops at a section state of a cycle
-        in ``known`` (known_attractor), and reports that cycle's outcome, period, chatter
-        and this section state, without its values."""
-        t, y, data = first(p, data0, start)
+    def settle(p, data, r, settings, repeat_tol, log, t, y, known):
+        """The sequence from (t, y, data) to its steady cycle, within settings.max_impacts,
+        its cycle's section states repeating to ``repeat_tol``; log[j] gets (rotor angle
+        mod 2 pi, psi) at section j (the last row takes any beyond). It stops at a section
+        state of a cycle in ``known`` (known_attractor), and reports that cycle's outcome,
+        period, chatter and this section state, without its values. Returns the Steady and
+        the state on the cycle its values were run from (where the sequence ended, without
+        one)."""
         history = np.empty((settings.max_impacts + 2, len(key_of(t, y, data, p))))
         tr = transient(p, data, r, settings, repeat_tol, log, t, y, history, known)
         if tr.ended:
-            return tr.steady
+            return tr.steady, tr.t, tr.y, tr.data
         count, period, a, cost = tr.count, tr.period, tr.acceleration, tr.cost
         t, y, data = tr.t, tr.y, tr.data
         impacts = count - 2 * period
@@ -782,9 +796,9 @@ def make_steady(c, jump_early, transient, cycle):
                                         repeat_tol, IMPACTS_COUNTED)
         if period == 0:
             return no_cycle(not_periodic(history, count), False, settings.max_impacts, cost,
-                            key_of(t, y, data, p))
+                            key_of(t, y, data, p)), t, y, data
         if tr.jumped and period == 1 and tr.steady.outcome == SEQUENCE_CYCLE:
-            return of_cycle(1, tr.steady, impacts, cost)
+            return of_cycle(1, tr.steady, impacts, cost), t, y, data
         # the steady cycle from where the sequence is (on the cycle, to tol); at period 1 on
         # a smooth map from Aitken's extrapolation of the last three sections instead, kept
         # if the cycle's residual beats the last iteration's step (H13)
@@ -799,14 +813,24 @@ def make_steady(c, jump_early, transient, cycle):
         result = cycle(t_run, y_run, data, p, r, settings, period)
         cost = add(cost, result.cost)
         if extrapolated and result.residual > last_step:
+            t_run, y_run = t, y
             result = cycle(t, y, data, p, r, settings, period)
             cost = add(cost, result.cost)
         if a.converged and result.residual > repeat_tol * max(
                 1.0, abs(history[count - 1, 0]), abs(history[count - 1, 1])):
+            t_run, y_run = a.t_orbit, a.y_orbit
             result = cycle(a.t_orbit, a.y_orbit, data, p, r, settings, period)
             cost = add(cost, result.cost)
         if result.outcome != SEQUENCE_CYCLE:  # the cycle did not repeat after all
-            return no_cycle(SEQUENCE_MAX_STEPS, result.chatter, impacts, cost, result.key)
-        return of_cycle(period, result, impacts, cost)
+            return (no_cycle(SEQUENCE_MAX_STEPS, result.chatter, impacts, cost, result.key),
+                    t_run, y_run, data)
+        return of_cycle(period, result, impacts, cost), t_run, y_run, data
 
-    return steady
+    @njit(**INNER_OPTIONS)
+    def steady(p, data0, r, settings, repeat_tol, log, start, known):
+        """The sequence from starting state number ``start`` (0: at rest, the tool's
+        ``first``), as ``settle``."""
+        t, y, data = first(p, data0, start)
+        return settle(p, data, r, settings, repeat_tol, log, t, y, known)
+
+    return steady, settle

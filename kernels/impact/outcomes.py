@@ -22,10 +22,12 @@ NO_COST = Counters(0, 0, 0)
 #: step), a flight's step budget and horizon (in the flight's time), and for an impact
 #: sequence its budget of impacts, the starting states per case, and the first section
 #: count at which it may be called not periodic before its budget (impact_map.settles_nowhere;
-#: 0: only at the budget)
+#: 0: only at the budget); ``finer_by`` > 1: each sequence that reaches a cycle goes on from
+#: it at rtol and atol finer_by times smaller to the cycle there (a second solve that need
+#: not fly the transient again; 0: one solve)
 Settings = namedtuple("Settings", ["method", "rtol", "atol", "dt", "max_steps", "horizon",
-                                   "max_impacts", "starts", "verdict_from"],
-                      defaults=(1000, 1, 64))
+                                   "max_impacts", "starts", "verdict_from", "finer_by"],
+                      defaults=(1000, 1, 64, 0.0))
 
 
 @njit(**INNER_OPTIONS)

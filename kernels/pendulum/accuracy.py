@@ -1,8 +1,8 @@
 """The accuracy policy of the integrated pendulum: what rtol, atol and step a requested
 accuracy ``tol`` takes, and the error each solve reports (``error_estimate``).
 
-``auto`` without a closed form solves twice by DOPRI5 and estimates the error from the
-difference; the exact flights (a table row with ``exact_flow``) take their step from the
+``auto`` without a closed form solves by DOPRI5, goes on from each cycle at a finer rtol
+and estimates the error from the difference; the exact flights (a table row with ``exact_flow``) take their step from the
 event search's interpolant error and report the section repeat tolerance; the rotor
 stop's closed form is exact to round-off.
 """
@@ -35,15 +35,19 @@ def auto_rtol(tol):
 #: the values whose relative error auto estimates (and bounds by tol)
 ESTIMATED = (ROW.amplitude, ROW.frequency, ROW.interval, ROW.speed, ROW.acceleration,
              ROW.rotor_speed)
-#: auto without a closed form: each case is solved at AUTO_COARSE times the calibrated rtol
-#: and AUTO_REFINE times finer; the finer solve is reported, with its error estimated as
-#: |coarse - fine| / (AUTO_REFINE - 1) (DOPRI5's global error proportional to rtol); a case
-#: whose estimate exceeds AUTO_ACCEPT tol (a safety factor on that proportionality) is
-#: solved again AUTO_REFINE times finer, at most AUTO_ROUNDS times
+#: auto without a closed form: each case is solved at AUTO_COARSE times the calibrated
+#: rtol, and where it reaches a cycle goes on from it AUTO_REFINE times finer (Settings'
+#: finer_by: the finer solve's own cycle, without flying the transient again); the finer
+#: values are reported, with their error estimated as |coarse - fine| / (AUTO_REFINE - 1)
+#: (DOPRI5's global error proportional to rtol); a case whose estimate exceeds AUTO_ACCEPT
+#: tol (a safety factor on that proportionality) is solved again, both stages
+#: AUTO_REFINE times finer, at most AUTO_ROUNDS times in all
 AUTO_ACCEPT = 0.1
 AUTO_COARSE = 2.0
 AUTO_REFINE = 8.0
 AUTO_ROUNDS = 3
+#: the finest rtol auto asks of DOPRI5 (round-off): no round goes finer
+AUTO_FINEST = 1e-14
 
 
 def estimated_error(coarse, fine, margins=False):
@@ -75,27 +79,27 @@ def estimated_error(coarse, fine, margins=False):
 
 def solve_auto(solve, cases, tol, margins=False):
     """auto on a system without a closed form: DOPRI5 at AUTO_COARSE times the calibrated
-    rtol and AUTO_REFINE times finer, refined further where the estimate exceeds
-    AUTO_ACCEPT tol (``margins``: the cycle's margins asked for count in it). ``solve(cases,
-    method, rtol, atol, dt)``: the rows of these cases by one method. Counters add up every
-    solve."""
+    rtol, going on from each cycle AUTO_REFINE times finer, both again AUTO_REFINE times
+    finer where the estimate exceeds AUTO_ACCEPT tol (``margins``: the cycle's margins
+    asked for count in it). ``solve(cases, method, rtol, atol, dt, finer_by) -> (rows,
+    first-stage rows)``. Counters add up every solve."""
     rtol = AUTO_COARSE * auto_rtol(tol)
-    coarse = solve(cases, METHOD_DOPRI5, rtol, rtol * AUTO_ATOL_PER_RTOL, 0.0)
-    rows = coarse.copy()
+    rows = np.empty((cases.shape[0], len(ROW)))
     pending = np.arange(cases.shape[0])
+    counters = [ROW.steps, ROW.rejected, ROW.events]
+    spent = np.zeros((cases.shape[0], len(counters)))
     for _ in range(AUTO_ROUNDS):
-        rtol /= AUTO_REFINE
-        fine = solve(cases[pending], METHOD_DOPRI5, max(rtol, 1e-14),
-                     max(rtol, 1e-14) * AUTO_ATOL_PER_RTOL, 0.0)
-        error = estimated_error(coarse, fine, margins)
-        counters = [ROW.steps, ROW.rejected, ROW.events]
-        fine[:, counters] += rows[np.ix_(pending, counters)]
-        fine[:, ROW.error] = error
+        fine, coarse = solve(cases[pending], METHOD_DOPRI5, rtol, rtol * AUTO_ATOL_PER_RTOL,
+                             0.0, AUTO_REFINE)
+        spent[pending] += fine[:, counters]
+        fine[:, ROW.error] = estimated_error(coarse, fine, margins)
         rows[pending] = fine
-        more = (error > AUTO_ACCEPT * tol) & (rtol > 1e-14)
-        coarse, pending = fine[more], pending[more]
+        rtol /= AUTO_REFINE
+        more = (fine[:, ROW.error] > AUTO_ACCEPT * tol) & (rtol / AUTO_REFINE >= AUTO_FINEST)
+        pending = pending[more]
         if not pending.size:
             break
+    rows[:, counters] = spent
     return rows
 
 

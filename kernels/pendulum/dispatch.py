@@ -23,11 +23,12 @@ ATTRACTOR_OUTPUTS = ("attractor_count", "basin_fraction")
 MARGIN_OUTPUTS = ("impact_speed_min_ratio", "edge_margin")
 
 
-def solve_system(entry, cases, settings):
-    """The rows of the cases of one system, by its entry point, at these Settings."""
-    out = np.empty((cases.shape[0], N_ROW))
-    entry(cases, settings, out, np.empty((1, 2)))
-    return out
+def solve_system(entry, cases, settings, first_stage=False):
+    """The rows of the cases of one system, by its entry point, at these Settings; with
+    ``first_stage``, also the rows of the first stage (settings.finer_by)."""
+    out, first = np.empty((2, cases.shape[0], N_ROW))
+    entry(cases, settings, out, first, np.empty((1, 2)))
+    return (out, first) if first_stage else out
 
 
 def _closed_form(cases, starts):
@@ -48,11 +49,12 @@ def _integrated(system, cases, method, stability, starts):
     entries = systems.TANGENT_ENTRY_POINTS if stability else systems.ENTRY_POINTS
     entry = entries.get(system, systems.ENTRY_POINTS[system])
 
-    def solve(sub, method_code, rtol, atol, dt):
+    def solve(sub, method_code, rtol, atol, dt, finer_by=0.0):
         return solve_system(entry, sub, systems.settings_for(
-            system, method_code, rtol, atol, dt, method.max_impacts, starts))
+            system, method_code, rtol, atol, dt, method.max_impacts, starts, finer_by),
+            first_stage=finer_by > 0.0)
 
-    # auto keeps two DOPRI5 solves where the multipliers are asked for: the tangent is
+    # auto keeps DOPRI5's two stages where the multipliers are asked for: the tangent is
     # integrated, and its error needs their estimate (estimated_error)
     exact = system.exact_flow and (method.integrator == INTEGRATOR_CLOSED
                                    or method.integrator == INTEGRATOR_AUTO and not stability)

@@ -13,8 +13,8 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
-from kernels.impact.impact_map import ATTRACTOR_TOL, KNOWN, make_impact_map
-from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings, add
+from kernels.impact.impact_map import ATTRACTOR_TOL, KNOWN, make_impact_map, with_cost
+from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_MAX_STEPS, Settings, add
 from kernels.impact.runge_kutta import METHOD_RK4
 from kernels.pendulum import models, tools
 from kernels.pendulum.cases import C, ROW
@@ -65,30 +65,63 @@ MAX_KEY = 3
 
 
 def make_block(contact, jump_early, parameters, data_of, frequency, stability=False):
-    """The block function of a system, ``block(cases, settings, rows, log)``: each case's
-    steady state into its row (ROW), and into ``log`` the section impacts (rotor angle mod
-    2 pi, psi) of the last case. ``frequency``: whether flights end where they started (the
-    rotor stop), so that pi over the flight time is the free oscillation's frequency
-    coefficient. ``stability``: carry the tangent through the steady cycle for its
-    multipliers. With ``settings.starts`` > 1 each case is also run from starts - 1 more
-    starting states (the tool's ``first``), and the distinct attractors they reach are
-    counted."""
-    steady = make_impact_map(contact, jump_early, stability).steady
+    """The block function of a system, ``block(cases, settings, rows, first_rows, log)``:
+    each case's steady state into its row (ROW), and into ``log`` the section impacts
+    (rotor angle mod 2 pi, psi) of the last case. ``frequency``: whether flights end where
+    they started (the rotor stop), so that pi over the flight time is the free
+    oscillation's frequency coefficient. ``stability``: carry the tangent through the
+    steady cycle for its multipliers. With ``settings.starts`` > 1 each case is also run
+    from starts - 1 more starting states (the tool's ``first``), and the distinct
+    attractors they reach are counted. With ``settings.finer_by`` > 1 each sequence that
+    reaches a cycle goes on from it at rtol and atol finer_by times smaller: ``rows`` get
+    that second stage's values, ``first_rows`` the first's (else the same)."""
+    driver = make_impact_map(contact, jump_early, stability)
+    steady, settle = driver.steady, driver.settle
 
     @njit(**INNER_OPTIONS)
-    def block(cases, settings, rows, log):
-        repeat_tol = section_repeat_tol(settings.method, settings.rtol)
+    def solve_start(p, data, r, settings, finer, tols, log, start, known, scratch):
+        """(the Steady of a start, that of its first stage) (see block); ``scratch``: a
+        one-row log for the second stage, whose sections stay out of ``log``. A regime
+        without a cycle is the first stage's, unless it is undetermined (the budget ran
+        out while the sequence still converged); where the second stage does not confirm
+        the first one's cycle (its period and chatter), the finer solve starts again."""
+        first, t, y, d = steady(p, data, r, settings, tols[0], log, start, known)
+        cycle = first.outcome == SEQUENCE_CYCLE
+        if settings.finer_by <= 1.0 or not (cycle or first.outcome == SEQUENCE_MAX_STEPS):
+            return first, first
+        cost = first.cost
+        if cycle:
+            then = settle(p, d, r, finer, tols[1], scratch, t, y, known)[0]
+            cost = add(cost, then.cost)
+            if (then.outcome == SEQUENCE_CYCLE and then.period == first.period
+                    and then.chatter == first.chatter):
+                return with_cost(then, first.impacts, cost), first
+        # undetermined, or not the first stage's cycle where it went on from it (a slow
+        # drift taken for a cycle, a chatter that settles otherwise): the finer solve from
+        # the start, as the first stage ran
+        again = steady(p, data, r, finer, tols[1], scratch, start, known)[0]
+        return with_cost(again, again.impacts, add(cost, again.cost)), first
+
+    @njit(**INNER_OPTIONS)
+    def block(cases, settings, rows, first_rows, log):
+        finer_by = max(settings.finer_by, 1.0)
+        finer = Settings(method=settings.method, rtol=settings.rtol / finer_by,
+                         atol=settings.atol / finer_by, dt=settings.dt,
+                         max_steps=settings.max_steps, horizon=settings.horizon,
+                         max_impacts=settings.max_impacts, starts=settings.starts,
+                         verdict_from=settings.verdict_from, finer_by=0.0)
+        tols = (section_repeat_tol(settings.method, settings.rtol),
+                section_repeat_tol(finer.method, finer.rtol))
         starts = settings.starts
         # per start: its steady state in the columns of impact_map.KNOWN
         seen = np.empty((starts, KNOWN.key + MAX_KEY))
+        scratch = np.empty((1, 2))
         for c in range(cases.shape[0]):
             case = cases[c]
             row = rows[c]
-            for j in range(row.shape[0]):
-                row[j] = math.nan
             p, data, r = parameters(case), data_of(case), case[C.R]
-            s = steady(p, data, r, settings, repeat_tol, log, int(0), seen[:0])
-            row[ROW.outcome] = s.outcome
+            s, first = solve_start(p, data, r, settings, finer, tols, log, int(0), seen[:0],
+                                   scratch)
             cost = s.cost
             if starts > 1:
                 n_keys = len(s.key)
@@ -96,7 +129,8 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
                 distinct, same = int(1), int(1)
                 for j in range(1, starts):
                     # a start stops on a cycle another start found: the same attractor
-                    other = steady(p, data, r, settings, repeat_tol, log, j, seen[:distinct])
+                    other = solve_start(p, data, r, settings, finer, tols, log, j,
+                                        seen[:distinct], scratch)[0]
                     cost = add(cost, other.cost)
                     remember(seen, distinct, other)
                     if _same_attractor(seen, int(0), distinct, n_keys):
@@ -108,30 +142,41 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
                             break
                     if new:
                         distinct += 1
-                row[ROW.attractors], row[ROW.basin] = distinct, same / starts
+                attractors, basin = float(distinct), same / starts
             else:
-                row[ROW.attractors], row[ROW.basin] = 1.0, 1.0
-            row[ROW.steps] = cost.steps + cost.rejected
-            row[ROW.rejected] = cost.rejected
-            row[ROW.events] = cost.events
-            row[ROW.impacts] = s.impacts
-            if s.outcome != SEQUENCE_CYCLE:
-                continue
-            row[ROW.period] = s.period
-            row[ROW.chatter] = 1.0 if s.chatter else 0.0
-            row[ROW.amplitude] = s.amplitude
-            row[ROW.frequency] = (math.pi * s.period / s.flight_time if frequency else
-                                  math.nan)
-            row[ROW.interval] = s.rotor_angle / s.period
-            row[ROW.speed] = s.speed / s.period
-            row[ROW.acceleration] = s.peak
-            row[ROW.rotor_speed] = s.rotor_angle / s.elapsed
-            m = s.margins
-            row[ROW.speed_ratio] = m.speed_min / m.speed_max
-            row[ROW.edge] = m.edge if math.isfinite(m.edge) else math.nan
-            row[ROW.modulus], row[ROW.angle] = m.modulus, m.angle
+                attractors, basin = 1.0, 1.0
+            write_row(row, s, cost, attractors, basin, frequency)
+            write_row(first_rows[c], first, first.cost, attractors, basin, frequency)
 
     return block
+
+
+@njit(**INLINE_OPTIONS)
+def write_row(row, s, cost, attractors, basin, frequency):
+    """A case's result row (ROW) from its Steady ``s``, the cost of all its sequences and
+    its attractors."""
+    for j in range(row.shape[0]):
+        row[j] = math.nan
+    row[ROW.outcome] = s.outcome
+    row[ROW.attractors], row[ROW.basin] = attractors, basin
+    row[ROW.steps] = cost.steps + cost.rejected
+    row[ROW.rejected] = cost.rejected
+    row[ROW.events] = cost.events
+    row[ROW.impacts] = s.impacts
+    if s.outcome != SEQUENCE_CYCLE:
+        return
+    row[ROW.period] = s.period
+    row[ROW.chatter] = 1.0 if s.chatter else 0.0
+    row[ROW.amplitude] = s.amplitude
+    row[ROW.frequency] = math.pi * s.period / s.flight_time if frequency else math.nan
+    row[ROW.interval] = s.rotor_angle / s.period
+    row[ROW.speed] = s.speed / s.period
+    row[ROW.acceleration] = s.peak
+    row[ROW.rotor_speed] = s.rotor_angle / s.elapsed
+    m = s.margins
+    row[ROW.speed_ratio] = m.speed_min / m.speed_max
+    row[ROW.edge] = m.edge if math.isfinite(m.edge) else math.nan
+    row[ROW.modulus], row[ROW.angle] = m.modulus, m.angle
 
 
 @njit(**INLINE_OPTIONS)
@@ -181,7 +226,8 @@ def build_block(system, contact, parameters, data_of, stability=False, returning
 
 #: a module-level entry point: numba caches a function on disk by its name and source
 #: file, and a closure called from Python would be compiled again in every process
-_ENTRY = "def {name}(cases, settings, rows, log):\n    _{name}(cases, settings, rows, log)\n"
+_ENTRY = ("def {name}(cases, settings, rows, first_rows, log):\n"
+          "    _{name}(cases, settings, rows, first_rows, log)\n")
 
 
 def _entry_point(name: str, block):
@@ -204,10 +250,10 @@ for _system in SYSTEMS:
                                                      build_block(*_args, stability=True))
 
 
-def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1):
+def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1, finer_by=0.0):
     """The Settings of a solve on a system (a table row), by name."""
     return Settings(method=int(method), rtol=float(rtol), atol=float(atol), dt=float(dt),
                     max_steps=MAX_STEPS,
                     horizon=float(CONTACTS[system.model, system.tool].horizon),
                     max_impacts=int(max_impacts), starts=int(starts),
-                    verdict_from=VERDICT_FROM)
+                    verdict_from=VERDICT_FROM, finer_by=float(finer_by))
