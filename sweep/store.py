@@ -139,17 +139,23 @@ class BlockStore:
                     "chunk_shape": list(plan.chunk_shape), "rows": plan.rows,
                     "blocks": plan.n_blocks}
         self.done: set[str] = set()
-        self.saved = 0  # blocks this run finished and kept
         compared = {"spec": "spec", "code_version": "code version",
                     "chunk_shape": "chunk size"}
         if open_partial(self.folder, manifest, compared, resume, force):
-            self.done = {name[:-4] for name in os.listdir(self.folder)
-                         if name.endswith(".npy") and not name.startswith(".")}
+            self.done = self._finished()
+
+    def _finished(self) -> set[str]:
+        """The names of the finished blocks on disk (a block being written has a hidden
+        temporary name)."""
+        return {name[:-4] for name in os.listdir(self.folder)
+                if name.endswith(".npy") and not name.startswith(".")}
 
     @property
     def kept(self) -> int:
-        """Finished blocks in the store: from earlier runs and from this one."""
-        return len(self.done) + self.saved
+        """Finished blocks in the store, from earlier runs and from this one, counted on
+        disk: a Ctrl-C between a block's rename and a count kept in memory made the
+        message one short of what was kept."""
+        return len(self._finished())
 
     def has(self, index) -> bool:
         return block_name(index) in self.done
@@ -157,7 +163,6 @@ class BlockStore:
     def save(self, index, block: np.ndarray) -> None:
         with atomic(self.folder / f"{block_name(index)}.npy") as tmp, open(tmp, "wb") as fh:
             np.save(fh, block)
-        self.saved += 1
 
     def load(self, index) -> np.ndarray:
         return np.load(self.folder / f"{block_name(index)}.npy")
