@@ -2,9 +2,10 @@
 
 ``make_impact_map(contact, jump_early)`` specialises the driver to a ``Contact``
 (kernels/impact/__init__.py) and returns a ``Driver`` whose ``steady(p, data, r, settings,
-repeat_tol, log, start, known) -> (Steady, t, y, data)`` runs a sequence (``settle`` the
-same from a given state: the second stage of auto goes on from the first one's cycle) (one factory each: the law, a contact,
-a section, the transient and its accelerators, the refined cycle, the whole sequence):
+repeat_tol, log, start, known) -> (Steady, t, y, data)`` runs a sequence, and ``settle``
+the same from a given state (auto's second stage goes on from the first one's cycle); one
+factory each: the law, a contact, a section, the transient and its accelerators, the
+refined cycle, the whole sequence:
 
 1. a contact: Newton's law on the normal speed along the contact Jacobian, through the
    model's impulse response; a bounce that would leave slower than SPEED_EPS ends a chatter

@@ -58,8 +58,6 @@ def lab_window_data(case):
     return (-tools.TWO_PI, case[C.tool_window], case[C.k], 0.0, 1.0)
 
 
-
-
 #: the longest section state of a tool (the blade's: psi, the gap's rate, the rotor speed)
 MAX_KEY = 3
 
