@@ -15,7 +15,7 @@ MECH = KERNEL.declaration
 OUT = MECH.output_index._asdict()
 VALUES = ("amplitude", "frequency_ratio", "impact_interval", "impact_speed",
           "acceleration_peak")
-EVALS_PER_STEP = {"rk4": 4, "dopri5": 6}  # new right-hand sides per step (DOPRI5: FSAL)
+EVALS_PER_STEP = {"rk4": 4, "dopri5": 6, "dop853": 12}  # new right-hand sides per step (FSAL)
 
 
 def points(model, n, seed):

@@ -3,7 +3,8 @@ right-hand sides instead): for each model and requested tolerance, the best sing
 the fastest of closed form, DOPRI5 at the loosest rtol and RK4 at the largest step meeting
 the tolerance at every design of the sweep, found in hindsight. Best of 3 runs each.
 
-Run: .venv/bin/python benchmarks/bench_auto.py   (writes benchmarks/results/auto.json)
+Run: .venv/bin/python benchmarks/bench_auto.py   (writes benchmarks/results/auto.json);
+with --dop853 only auto by DOP853 against auto by DOPRI5 at tight tol (auto_dop853.json).
 """
 
 from __future__ import annotations
@@ -50,7 +51,45 @@ def against_one_solve(params, ref, tol):
             "one_error": float(np.max(errors(single, ref)))}
 
 
+def auto_by_method(tols=(1e-9, 1e-10, 1e-11)):
+    """auto at tight tol by DOP853 (as it chooses) against auto by DOPRI5 at its own
+    calibrated rtol (AUTO_DOP853_BELOW set to 0), on the rotor model on its stop: right-hand
+    sides, CPU time (median of interleaved rounds) and worst errors against DOPRI5 at rtol
+    1e-13. Writes results/auto_dop853.json."""
+    params = np.concatenate([points("rotor", 12, seed=s) for s in range(400, 405)], axis=1)
+    ref, _ = run(params, "dopri5", rtol=1e-13)
+    below = accuracy.AUTO_DOP853_BELOW
+
+    def by_dopri5(tol):
+        accuracy.AUTO_DOP853_BELOW = 0.0
+        try:
+            return run(params, "auto", tol=tol)
+        finally:
+            accuracy.AUTO_DOP853_BELOW = below
+
+    result = {"machine": platform.node(), "designs": params.shape[1]}
+    for tol in tols:
+        out, status = run(params, "auto", tol=tol)
+        other, other_status = by_dopri5(tol)
+        assert np.all(status == 0) and np.all(other_status == 0)
+        t_dop853, t_dopri5 = paired_cpu_times(lambda: run(params, "auto", tol=tol),
+                                              lambda: by_dopri5(tol))
+        entry = {"dopri5_over_dop853_evaluations": cost(other, "dopri5") / cost(out, "dop853"),
+                 "dopri5_over_dop853_cpu": t_dopri5 / t_dop853,
+                 "dop853_error": float(np.max(errors(out, ref))),
+                 "dopri5_error": float(np.max(errors(other, ref)))}
+        result[f"rotor tol {tol:g}"] = entry
+        print(f"rotor tol {tol:g}: auto by DOP853 {entry['dopri5_over_dop853_cpu']:.2f}x "
+              f"faster in CPU, {entry['dopri5_over_dop853_evaluations']:.2f}x fewer "
+              f"right-hand sides; worst errors {entry['dop853_error']:.1e} and "
+              f"{entry['dopri5_error']:.1e}")
+    Path(__file__).resolve().parent.joinpath("results", "auto_dop853.json").write_text(
+        json.dumps(result, indent=2) + "\n")
+
+
 def main():
+    if "--dop853" in sys.argv[1:]:
+        return auto_by_method()
     result = {"machine": platform.node()}
     for model in ("paper", "rotor"):
         params = np.concatenate([points(model, 12, seed=s) for s in range(400, 405)],

@@ -69,10 +69,10 @@ def kernel_loop():
                 steps += 1
                 if err <= 1.0:
                     t, y, f = t + h, y1, f1
-                    h = next_step(h, err, rejected, prev)
+                    h = next_step(METHOD_DOPRI5, h, err, rejected, prev)
                     prev, rejected = err, False
                 else:
-                    h = next_step(h, err, True, prev)
+                    h = next_step(METHOD_DOPRI5, h, err, True, prev)
                     rejected = True
             out[i] = y[0] + y[1]
         return steps

@@ -20,8 +20,8 @@ from kernels.impact.outcomes import (SEQUENCE_CYCLE, SEQUENCE_DEGENERATE, SEQUEN
 from kernels.pendulum import dispatch
 from kernels.pendulum.cases import CASE_COLUMNS, ROW
 from kernels.pendulum.dispatch import (ATTRACTOR_OUTPUTS, INTEGRATOR_AUTO, INTEGRATOR_CLOSED,
-                                       INTEGRATOR_DOPRI5, INTEGRATOR_RK4, USED_CLOSED,
-                                       USED_DOPRI5, USED_RK4)
+                                       INTEGRATOR_DOP853, INTEGRATOR_DOPRI5, INTEGRATOR_RK4,
+                                       USED_CLOSED, USED_DOP853, USED_DOPRI5, USED_RK4)
 from kernels.pendulum.distinct import distinct_rows
 from kernels.pendulum.models import MODEL_ROTOR
 from kernels.pendulum.table import MODELS, SYSTEMS, TOOL_LAB_WINDOW, TOOLS, with_closed_form
@@ -33,9 +33,16 @@ R_ = {name: code for code, name in enumerate(REGIMES)}
 _ROTOR = {"model": ("rotor",)}
 
 
+#: dop853's loosest rtol: above it its long steps leave the acceleration peak's place to
+#: the cubic interpolant, which missed it by 6.9e-4 at rtol 1e-6 on a rotor design
+#: (1.9e-7 at 1e-8); auto takes DOP853 only at tol <= 1e-10
+DOP853_RTOL_MAX = 1e-8
+
+
 def _rules(given: dict) -> str | None:
     """The closed form exists for the constant-speed models on the rotor stop and for the
-    rigid model's flights on the blade; the energy per blow needs the striker's mass."""
+    rigid model's flights on the blade; the energy per blow needs the striker's mass;
+    dop853 is for tight rtol (DOP853_RTOL_MAX)."""
     if "blow_energy" in given.get("outputs", ()) and "striker_mass" not in given:
         return "striker_mass: required for the output blow_energy"
     models = given.get("model", {"paper"})
@@ -45,7 +52,11 @@ def _rules(given: dict) -> str | None:
         having = ", ".join(f"{s.model} on {s.tool}" for s in SYSTEMS
                            if s.closed_form or s.exact_flow)
         return (f"method.integrator: \"closed_form\" exists only for {having}; allowed "
-                "here: \"auto\", \"rk4\", \"dopri5\"")
+                "here: \"auto\", \"rk4\", \"dopri5\", \"dop853\"")
+    loosest = max(given.get("method.rtol", {0.0}))
+    if "dop853" in given.get("method.integrator", ()) and loosest > DOP853_RTOL_MAX:
+        return (f"method.rtol: value {loosest:g} is not allowed with integrator \"dop853\"; "
+                f"allowed: a number in [1e-14, {DOP853_RTOL_MAX:g}] (looser: \"dopri5\")")
     if max(given.get("method.starts", {1})) > 1 and not given.get("outputs", set()) & set(
             ATTRACTOR_OUTPUTS):
         return ("method.starts: more than one start is used only with the outputs "
@@ -150,7 +161,8 @@ DECLARATION = Mechanism(
         Output("n_events", "1", "impact events located by the integrator", diagnostic=True,
                count=True),
         Output("method_used", "1", "method that produced the values",
-               flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5},
+               flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5,
+                      "dop853": USED_DOP853},
                everywhere=True),
         Output("multiplier_modulus", "1", "largest modulus |mu| of the multipliers of the "
                "steady cycle's impact map (of its n-fold map for period_n; exact symmetries "
@@ -200,15 +212,18 @@ DECLARATION = Mechanism(
                  "paper and rigid models on the rotor stop, the rigid model's flights on the "
                  "blade; else DOPRI5 to the cycle, and on from it 8 times finer in rtol, "
                  "the finer solve reported with its error_estimate and refined where that exceeds tol/10), "
-                 "closed_form (only where there is one), rk4 or dopri5",
+                 "closed_form (only where there is one), rk4, dopri5 or dop853 (Dormand-Prince "
+                 "8(5,3), for tight rtol)",
                  default="auto",
                  choices={"auto": INTEGRATOR_AUTO, "closed_form": INTEGRATOR_CLOSED,
-                          "rk4": INTEGRATOR_RK4, "dopri5": INTEGRATOR_DOPRI5}),
-        Quantity("rtol", "1", "dopri5 relative tolerance", default=1e-10, minimum=1e-14,
-                 maximum=1e-2, used_when={"integrator": ("dopri5",)}),
-        Quantity("atol", "1", "dopri5 absolute tolerance (rad, rad per rotor radian)",
+                          "rk4": INTEGRATOR_RK4, "dopri5": INTEGRATOR_DOPRI5,
+                          "dop853": INTEGRATOR_DOP853}),
+        Quantity("rtol", "1", "dopri5 and dop853 relative tolerance", default=1e-10,
+                 minimum=1e-14, maximum=1e-2, used_when={"integrator": ("dopri5", "dop853")}),
+        Quantity("atol", "1", "dopri5 and dop853 absolute tolerance (rad, rad per rotor "
+                 "radian)",
                  default=1e-12, minimum=1e-16, maximum=1e-2,
-                 used_when={"integrator": ("dopri5",)}),
+                 used_when={"integrator": ("dopri5", "dop853")}),
         Quantity("dt", "1", "rk4 step in rotor radians", default=0.002, minimum=1e-6,
                  maximum=0.5, used_when={"integrator": ("rk4",)}),
         Quantity("max_impacts", "1", "impacts simulated at most", default=1000, minimum=1,

@@ -14,14 +14,14 @@ from numba import njit
 from kernels.impact.impact_map import SPEED_EPS, make_impact_map
 from kernels.impact.tangent import DPSI, DW, make_tracker
 from kernels.impact.outcomes import FLIGHT_EVENT, Settings
-from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_RK4, make_stepper
+from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5, METHOD_RK4, make_stepper
 from kernels.pendulum import models, tools
 from tests.stop_tool import relative_stop
 
 MODELS = {"paper": models.PAPER, "rigid": models.RIGID, "rotor": models.ROTOR}
 TOOLS = {"rotor_stop": tools.rotor_stop, "lab_window": tools.lab_window,
          "relative_stop": relative_stop}
-METHODS = {"rk4": METHOD_RK4, "dopri5": METHOD_DOPRI5}
+METHODS = {"rk4": METHOD_RK4, "dopri5": METHOD_DOPRI5, "dop853": METHOD_DOP853}
 
 
 @cache

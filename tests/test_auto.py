@@ -94,6 +94,26 @@ def test_auto_costs_at_most_1_3_times_one_solve_at_the_accuracy_it_delivers(roto
     assert np.max(errors(out, ref)) <= 2 * max(np.max(errors(one, ref)), 10 * finer)
 
 
+def test_at_tight_tol_auto_integrates_by_dop853_meets_tol_and_pays_less(rotor_sweep,
+                                                                      monkeypatch):
+    """Issue 40. At tol 1e-10 (below AUTO_DOP853_BELOW) auto takes DOP853: every design of
+    a sweep not used to calibrate it within tol of DOPRI5 at rtol 1e-13 and its estimate
+    within AUTO_ACCEPT tol, the same regimes, method_used dop853, and fewer right-hand
+    sides than auto by DOPRI5 at its own calibrated rtol (measured 0.70 times)."""
+    params, ref = rotor_sweep
+    tol = 1e-10
+    assert accuracy.auto_method(tol) == accuracy.METHOD_DOP853
+    out, status = run(params, "auto", tol=tol)
+    assert np.all(status == OK) and np.all(out[OUT["regime"]] == ref[OUT["regime"]])
+    assert np.max(errors(out, ref)) <= tol
+    assert np.all(out[OUT["error_estimate"]] <= AUTO_ACCEPT * tol)
+    assert set(out[OUT["method_used"]]) == {MECH.output("method_used").flags["dop853"]}
+    monkeypatch.setattr(accuracy, "AUTO_DOP853_BELOW", 0.0)
+    by_dopri5, status = run(params, "auto", tol=tol)
+    assert np.all(status == OK) and np.max(errors(by_dopri5, ref)) <= tol
+    assert cost(out, "dop853") <= 0.8 * cost(by_dopri5, "dopri5")
+
+
 def test_auto_refines_where_its_estimate_misses(rotor_sweep, monkeypatch):
     """With an acceptance threshold no design meets, every design is solved AUTO_ROUNDS
     times finer: the estimate falls with rtol, the counters add up every solve, and the

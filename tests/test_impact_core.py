@@ -23,6 +23,7 @@ from kernels.impact.impact_map import (aitken, aitken_jump, classify_period,
 from kernels.impact.outcomes import SEQUENCE_MAX_STEPS, SEQUENCE_NOT_PERIODIC
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW)
+from kernels.impact.runge_kutta import make_stepper
 from kernels.impact.tuples import relative_scales
 from tests.probes import fixed_steps_of, settings
 
@@ -106,18 +107,70 @@ def blowup_flight(t, y, s):
     return _blowup_flight(t, y, 0.0, 0.0, s, False)
 
 
-@pytest.mark.parametrize("method, order", [("rk4", 4), ("dopri5", 5)])
-def test_order_of_each_method_measured_by_regression(method, order):
-    """Global error of the oscillator at t = 2 from (1, 0) over fixed step sizes: the
+@pytest.mark.parametrize("method, order, t_end, steps", [
+    ("rk4", 4, 2.0, [10, 20, 40, 80]), ("dopri5", 5, 2.0, [10, 20, 40, 80]),
+    ("dop853", 8, 8.0, [8, 12, 16, 24])])  # longer steps: DOP853's error reaches round-off
+def test_order_of_each_method_measured_by_regression(method, order, t_end, steps):
+    """Global error of the oscillator at t_end from (1, 0) over fixed step sizes: the
     fitted slope of log error against log h is the method's order."""
     code = settings(method).method
-    steps = np.array([10, 20, 40, 80])
+    steps = np.array(steps)
     errors = []
     for n in steps:
-        x, v = fixed_steps(code, (1.0, 0.0), OSCILLATOR, 2.0 / n, n)
-        errors.append(math.hypot(x - math.cos(2.0), v + math.sin(2.0)))
+        x, v = fixed_steps(code, (1.0, 0.0), OSCILLATOR, t_end / n, n)
+        errors.append(math.hypot(x - math.cos(t_end), v + math.sin(t_end)))
     slope = -np.polyfit(np.log(steps), np.log(errors), 1)[0]
     assert order - 0.25 < slope < order + 0.3, (slope, errors)
+
+
+def test_dop853_tableau_is_scipys():
+    """The DOP853 coefficients in the kernel are scipy's (Hairer's dop853.f), entry by
+    entry: every nonzero one, at the stages each row names, and nothing else."""
+    from scipy.integrate._ivp import dop853_coefficients as ref
+
+    from kernels.impact import runge_kutta as rk
+
+    def nonzero(row, n):
+        return [(j, float(row[j])) for j in range(n) if row[j] != 0.0]
+
+    # the stages each row weighs, as named above it in the kernel
+    weighs = {}
+    for line in open(rk.__file__):
+        if line.startswith("# D_") and " weighs " in line:
+            name, ks = line[2:].split(" weighs ")
+            weighs[name] = [int(k.strip()[1:]) - 1 for k in ks.split(",")]
+    for stage in range(1, ref.N_STAGES):
+        name = f"D_A{stage + 1}"
+        assert list(zip(weighs[name], getattr(rk, name))) == nonzero(ref.A[stage], stage)
+    for name, row in (("D_B", ref.B), ("D_E3", ref.E3), ("D_E5", ref.E5)):
+        assert list(zip(weighs[name], getattr(rk, name))) == nonzero(row, len(row))
+
+
+@njit
+def _one_step(method, h):
+    y = (1.0, 0.0)
+    return _oscillator_step(method, y, line_rhs(y, OSCILLATOR), h, OSCILLATOR, 1e-30, 1.0)
+
+
+_oscillator_step = make_stepper(line_rhs, relative_scales)
+
+
+@pytest.mark.parametrize("method, order", [("dopri5", 5), ("dop853", 8)])
+def test_embedded_error_measure_has_the_order_of_the_step_it_controls(method, order):
+    """One step of the oscillator from (1, 0) at atol 1: the error measure falls as
+    h^order (DOP853's combined 5th/3rd-order measure as h^8, DOPRI5's as h^5) and stays
+    above the step's true local error, so the controller never accepts more than it
+    asks."""
+    code = settings(method).method
+    hs = np.array([0.8, 0.4, 0.2, 0.1])
+    measured, true = [], []
+    for h in hs:
+        (x, v), _, err = _one_step(code, h)
+        measured.append(err)
+        true.append(math.hypot(x - math.cos(h), v + math.sin(h)) / math.sqrt(2.0))
+    slope = np.polyfit(np.log(hs), np.log(measured), 1)[0]
+    assert order - 0.2 < slope < order + 0.2, (slope, measured)
+    assert np.all(np.array(measured) > np.array(true)), (measured, true)
 
 
 @pytest.mark.slow

@@ -1,10 +1,11 @@
 """The accuracy policy of the integrated pendulum: what rtol, atol and step a requested
 accuracy ``tol`` takes, and the error each solve reports (``error_estimate``).
 
-``auto`` without a closed form solves by DOPRI5, goes on from each cycle at a finer rtol
-and estimates the error from the difference; the exact flights (a table row with ``exact_flow``) take their step from the
-event search's interpolant error and report the section repeat tolerance; the rotor
-stop's closed form is exact to round-off.
+``auto`` without a closed form solves by DOPRI5 (DOP853 at tight tol), goes on from each
+cycle at a finer rtol and estimates the error from the difference; the exact flights (a
+table row with ``exact_flow``) take their step from the event search's interpolant error
+and report the section repeat tolerance; the rotor stop's closed form is exact to
+round-off.
 """
 
 import math
@@ -12,7 +13,7 @@ import math
 import numpy as np
 
 from kernels.impact.outcomes import SEQUENCE_CYCLE
-from kernels.impact.runge_kutta import METHOD_DOPRI5
+from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5
 from kernels.pendulum.cases import ROW
 
 #: auto without a closed form: DOPRI5 at atol = rtol (psi and psi' are O(1), so the absolute
@@ -24,10 +25,29 @@ from kernels.pendulum.cases import ROW
 #: accuracy measured. Factors by log10(tol), linear in between.
 AUTO_RTOL_FACTOR = ((-3.0, 0.01), (-4.0, 0.08), (-5.0, 0.1), (-6.0, 0.2), (-8.0, 0.3))
 AUTO_ATOL_PER_RTOL = 1.0
+#: at tol <= AUTO_DOP853_BELOW auto integrates by DOP853 at rtol = tol x AUTO_DOP853_FACTOR.
+#: On 120 random rotor designs (seeds 0-9 of the sampler) against DOPRI5 at rtol 1e-13,
+#: DOP853's worst output error was 4-8 rtol at rtol 1e-12 to 1e-9 (the acceleration peak
+#: the largest; DOPRI5's 1.0-1.4 rtol) and 19 rtol at 1e-8, where DOPRI5 at its own
+#: calibrated rtol needs as many right-hand sides,
+#: and at tol 1e-9 auto by DOP853 took 1.17x fewer right-hand sides but 1.05x the CPU time
+#: (benchmarks/bench_auto.py --dop853): DOP853 pays from 1e-10 on. The factor keeps that
+#: worst error below tol/2.
+AUTO_DOP853_BELOW = 1e-10
+AUTO_DOP853_FACTOR = 0.07
+
+
+def auto_method(tol):
+    """The core's method auto integrates with at an accuracy tol: DOPRI5, or DOP853 where
+    tol is tight (AUTO_DOP853_BELOW)."""
+    return METHOD_DOP853 if tol <= AUTO_DOP853_BELOW else METHOD_DOPRI5
 
 
 def auto_rtol(tol):
-    """DOPRI5's rtol for a requested output accuracy tol (AUTO_RTOL_FACTOR)."""
+    """The rtol of auto's method for a requested output accuracy tol (AUTO_RTOL_FACTOR,
+    AUTO_DOP853_FACTOR)."""
+    if auto_method(tol) == METHOD_DOP853:
+        return tol * AUTO_DOP853_FACTOR
     x, f = np.array(AUTO_RTOL_FACTOR).T
     return tol * float(np.interp(math.log10(tol), x[::-1], f[::-1]))
 
@@ -39,14 +59,14 @@ ESTIMATED = (ROW.amplitude, ROW.frequency, ROW.interval, ROW.speed, ROW.accelera
 #: rtol, and where it reaches a cycle goes on from it AUTO_REFINE times finer (Settings'
 #: finer_by: the finer solve's own cycle, without flying the transient again); the finer
 #: values are reported, with their error estimated as |coarse - fine| / (AUTO_REFINE - 1)
-#: (DOPRI5's global error proportional to rtol); a case whose estimate exceeds AUTO_ACCEPT
+#: (the global error of DOPRI5 and DOP853 about proportional to rtol); a case whose estimate exceeds AUTO_ACCEPT
 #: tol (a safety factor on that proportionality) is solved again, both stages
 #: AUTO_REFINE times finer, at most AUTO_ROUNDS times in all
 AUTO_ACCEPT = 0.1
 AUTO_COARSE = 2.0
 AUTO_REFINE = 8.0
 AUTO_ROUNDS = 3
-#: the finest rtol auto asks of DOPRI5 (round-off): no round goes finer
+#: the finest rtol auto asks of its method (round-off): no round goes finer
 AUTO_FINEST = 1e-14
 
 
@@ -78,7 +98,7 @@ def estimated_error(coarse, fine, margins=False):
 
 
 def solve_auto(solve, cases, tol, margins=False):
-    """auto on a system without a closed form: DOPRI5 at AUTO_COARSE times the calibrated
+    """auto on a system without a closed form: auto_method at AUTO_COARSE times the calibrated
     rtol, going on from each cycle AUTO_REFINE times finer, both again AUTO_REFINE times
     finer where the estimate exceeds AUTO_ACCEPT tol (``margins``: the cycle's margins
     asked for count in it). ``solve(cases, method, rtol, atol, dt, finer_by) -> (rows,
@@ -89,7 +109,7 @@ def solve_auto(solve, cases, tol, margins=False):
     counters = [ROW.steps, ROW.rejected, ROW.events]
     spent = np.zeros((cases.shape[0], len(counters)))
     for _ in range(AUTO_ROUNDS):
-        fine, coarse = solve(cases[pending], METHOD_DOPRI5, rtol, rtol * AUTO_ATOL_PER_RTOL,
+        fine, coarse = solve(cases[pending], auto_method(tol), rtol, rtol * AUTO_ATOL_PER_RTOL,
                              0.0, AUTO_REFINE)
         spent[pending] += fine[:, counters]
         fine[:, ROW.error] = estimated_error(coarse, fine, margins)

@@ -6,16 +6,21 @@ policy (accuracy.py). Every choice is read from the table of systems (table.py).
 import numpy as np
 
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_SEPARATRIX
-from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_EXACT, METHOD_RK4
-from kernels.pendulum.accuracy import (closed_form_estimate, exact_settings,
+from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5, METHOD_EXACT, METHOD_RK4
+from kernels.pendulum.accuracy import (auto_method, closed_form_estimate, exact_settings,
                                        solve_auto)
 from kernels.pendulum.cases import N_ROW, ROW, C
 from kernels.pendulum.closed_form import (closed_form_block, driven_stop_margins,
                                           driven_stop_preamble)
 from kernels.pendulum.table import MODELS, SYSTEMS, TOOLS
 
-INTEGRATOR_AUTO, INTEGRATOR_CLOSED, INTEGRATOR_RK4, INTEGRATOR_DOPRI5 = 0, 1, 2, 3
-USED_CLOSED, USED_RK4, USED_DOPRI5 = 0, 1, 2
+INTEGRATOR_AUTO, INTEGRATOR_CLOSED, INTEGRATOR_RK4, INTEGRATOR_DOPRI5, INTEGRATOR_DOP853 = range(5)
+USED_CLOSED, USED_RK4, USED_DOPRI5, USED_DOP853 = range(4)
+#: the core's method of each fixed integrator, and the method_used flag of each method
+FIXED = {INTEGRATOR_RK4: METHOD_RK4, INTEGRATOR_DOPRI5: METHOD_DOPRI5,
+         INTEGRATOR_DOP853: METHOD_DOP853}
+USED = {METHOD_EXACT: USED_CLOSED, METHOD_RK4: USED_RK4, METHOD_DOPRI5: USED_DOPRI5,
+        METHOD_DOP853: USED_DOP853}
 #: outputs that need the tangent of the steady cycle, the ones that need several starts,
 #: and the cycle's margins (counted in auto's error estimate where asked for)
 STABILITY_OUTPUTS = ("multiplier_modulus", "multiplier_angle", "stability_margin")
@@ -60,17 +65,19 @@ def _integrated(system, cases, method, stability, starts):
                                    or method.integrator == INTEGRATOR_AUTO and not stability)
     rk4 = method.integrator == INTEGRATOR_RK4
     if exact:
+        code = METHOD_EXACT
         rtol, atol, dt = exact_settings(method.tol)
-        out = solve(cases, METHOD_EXACT, rtol, atol, dt)
-        out[:, ROW.error] = closed_form_estimate(out, section_repeat_tol(METHOD_EXACT, rtol))
+        out = solve(cases, code, rtol, atol, dt)
+        out[:, ROW.error] = closed_form_estimate(out, section_repeat_tol(code, rtol))
     elif method.integrator == INTEGRATOR_AUTO:
+        code = auto_method(method.tol)
         out = solve_auto(solve, cases, method.tol,
                          bool(set(method.outputs) & set(MARGIN_OUTPUTS)))
     else:
-        out = solve(cases, METHOD_RK4 if rk4 else METHOD_DOPRI5, method.rtol, method.atol,
-                    method.dt)
+        code = FIXED[method.integrator]
+        out = solve(cases, code, method.rtol, method.atol, method.dt)
         out[:, ROW.error] = np.nan
-    out[:, ROW.method] = USED_CLOSED if exact else USED_RK4 if rk4 else USED_DOPRI5
+    out[:, ROW.method] = USED[code]
     if system.closed_form:  # integrated anyway: what the closed form says all the same
         tol = 1e-9 if rk4 else max(10.0 * method.rtol, 1e-12)
         for j in range(cases.shape[0]):
