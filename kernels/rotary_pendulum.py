@@ -33,16 +33,9 @@ R_ = {name: code for code, name in enumerate(REGIMES)}
 _ROTOR = {"model": ("rotor",)}
 
 
-#: dop853's loosest rtol: above it its long steps leave the acceleration peak's place to
-#: the cubic interpolant, which missed it by 6.9e-4 at rtol 1e-6 on a rotor design
-#: (1.9e-7 at 1e-8); auto takes DOP853 only at tol <= 1e-10
-DOP853_RTOL_MAX = 1e-8
-
-
 def _rules(given: dict) -> str | None:
     """The closed form exists for the constant-speed models on the rotor stop and for the
-    rigid model's flights on the blade; the energy per blow needs the striker's mass;
-    dop853 is for tight rtol (DOP853_RTOL_MAX)."""
+    rigid model's flights on the blade; the energy per blow needs the striker's mass."""
     if "blow_energy" in given.get("outputs", ()) and "striker_mass" not in given:
         return "striker_mass: required for the output blow_energy"
     models = given.get("model", {"paper"})
@@ -53,10 +46,6 @@ def _rules(given: dict) -> str | None:
                            if s.closed_form or s.exact_flow)
         return (f"method.integrator: \"closed_form\" exists only for {having}; allowed "
                 "here: \"auto\", \"rk4\", \"dopri5\", \"dop853\"")
-    loosest = max(given.get("method.rtol", {0.0}))
-    if "dop853" in given.get("method.integrator", ()) and loosest > DOP853_RTOL_MAX:
-        return (f"method.rtol: value {loosest:g} is not allowed with integrator \"dop853\"; "
-                f"allowed: a number in [1e-14, {DOP853_RTOL_MAX:g}] (looser: \"dopri5\")")
     if max(given.get("method.starts", {1})) > 1 and not given.get("outputs", set()) & set(
             ATTRACTOR_OUTPUTS):
         return ("method.starts: more than one start is used only with the outputs "

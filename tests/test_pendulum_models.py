@@ -665,17 +665,6 @@ def refusal(text, allowed):
     return str(err.value)
 
 
-@pytest.mark.parametrize("rtol, allowed", [(1e-8, True), (1e-12, True), (1e-6, False)])
-def test_dop853_at_a_loose_rtol_is_refused_in_one_line(rtol, allowed):
-    """dop853 takes rtol <= 1e-8 (kr.DOP853_RTOL_MAX): above it the cubic interpolant
-    places the acceleration peak; the refusal names the field and what is allowed."""
-    message = refusal('mechanism = "rotary_pendulum"\n[grid]\nk = [1.0, 2.0]\n[method]\n'
-                      f'integrator = "dop853"\nrtol = {rtol!r}\n', allowed)
-    if not allowed:
-        assert message.startswith("method.rtol") and "\n" not in message
-        assert "1e-08" in message and '"dopri5"' in message
-
-
 def test_distinct_rows_equals_the_exact_sort_and_survives_a_hash_collision(monkeypatch):
     rng = np.random.default_rng(3)
     keys = rng.integers(0, 4, size=(500, 10)).astype(float)

@@ -30,7 +30,7 @@ AUTO_ATOL_PER_RTOL = 1.0
 #: DOP853's worst output error was 4-8 rtol at rtol 1e-12 to 1e-9 (the acceleration peak
 #: the largest; DOPRI5's 1.0-1.4 rtol) and 19 rtol at 1e-8, where DOPRI5 at its own
 #: calibrated rtol needs as many right-hand sides,
-#: and at tol 1e-9 auto by DOP853 took 1.17x fewer right-hand sides but 1.05x the CPU time
+#: and at tol 1e-9 auto by DOP853 took 1.17x fewer right-hand sides but as much CPU time
 #: (benchmarks/bench_auto.py --dop853): DOP853 pays from 1e-10 on. The factor keeps that
 #: worst error below tol/2.
 AUTO_DOP853_BELOW = 1e-10
