@@ -511,3 +511,20 @@ def test_a_chattering_cycle_has_its_slowest_impact_near_zero():
     stop, stop_status, _ = pendulum(model="rotor", tool="rotor_stop", k=1.0, kappa=2.0,
                                     R=[0.0, 0.05, 0.1])
     assert stop_status == ["ok"] * 3 and (stop["impact_speed_min_ratio"] == 1.0).all()
+
+
+@pytest.mark.parametrize("design", [
+    dict(model="rotor", tool="rotor_stop", k=1.0, kappa=1.2, R=0.05),
+    dict(model="rotor", tool="lab_window", k=1.0, kappa=1.2, R=0.01, tool_window=0.3),
+])
+def test_dop853_multipliers_are_dopri5s(design):
+    """Issue 40: with DOP853 the tangent's flights are stepped by DOPRI5 at the same rtol
+    (DOP853 is not compiled into them); the multipliers of a DOP853 solve at rtol 1e-11
+    are those of DOPRI5 at 1e-12 within 1e-7, and so is the impact speed."""
+    high, high_status, _ = pendulum({"integrator": "dop853", "rtol": 1e-11, "atol": 1e-13},
+                                    (*STABILITY, "impact_speed"), **design)
+    low, low_status, _ = pendulum({"integrator": "dopri5", "rtol": 1e-12, "atol": 1e-14},
+                                  (*STABILITY, "impact_speed"), **design)
+    assert high_status == ["ok"] == low_status
+    for name in ("multiplier_modulus", "multiplier_angle", "impact_speed"):
+        assert high[name][0] == pytest.approx(low[name][0], rel=1e-7, abs=1e-7), name

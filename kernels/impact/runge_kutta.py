@@ -84,10 +84,12 @@ def _no_exact(y, h, p):
     return y
 
 
-def make_stepper(rhs, scales, exact=None):
+def make_stepper(rhs, scales, exact=None, high_order=True):
     """The step of the methods, specialised to rhs, the error scales and, where the system
     has one, its exact flow ``exact(y, h, p)`` (its error estimate is 0); a system without
-    one takes DOPRI5's step for METHOD_EXACT (the rule at METHOD_EXACT)."""
+    one takes DOPRI5's step for METHOD_EXACT (the rule at METHOD_EXACT). Without
+    ``high_order`` DOP853 is not compiled in, and its callers step by DOPRI5
+    (``low_order``)."""
     has_exact = exact is not None
     exact = exact if has_exact else _no_exact
 
@@ -135,10 +137,11 @@ def make_stepper(rhs, scales, exact=None):
         if has_exact and method == METHOD_EXACT:
             y1 = exact(y, h, p)
             return y1, rhs(y1, p), 0.0
-        if method == METHOD_DOP853:
-            y1, f1, err5, err3 = dop853(y, f0, h, p)
-            scale = scales(y, y1, rtol, atol)
-            return y1, f1, dop853_error(error_norm(err5, scale), error_norm(err3, scale))
+        if high_order:  # a separate test, so that without it numba prunes DOP853 away
+            if method == METHOD_DOP853:
+                y1, f1, err5, err3 = dop853(y, f0, h, p)
+                scale = scales(y, y1, rtol, atol)
+                return y1, f1, dop853_error(error_norm(err5, scale), error_norm(err3, scale))
         if method != METHOD_RK4:
             y1, f1, err = dopri5(y, f0, h, p)
             return y1, f1, error_norm(err, scales(y, y1, rtol, atol))
@@ -156,6 +159,13 @@ def dop853_error(rms5, rms3):
     order's alone would shrink the step too far at tight tolerances; 0 where both vanish."""
     denominator = rms5 * rms5 + 0.01 * rms3 * rms3
     return rms5 * rms5 / math.sqrt(denominator) if denominator > 0.0 else 0.0
+
+
+@njit(**INLINE_OPTIONS)
+def low_order(method):
+    """The method a stepper made without ``high_order`` takes for ``method``: DOPRI5 for
+    DOP853, so that its step-size control is the step's."""
+    return METHOD_DOPRI5 if method == METHOD_DOP853 else method
 
 
 @njit(**INNER_OPTIONS)
