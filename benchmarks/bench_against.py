@@ -6,7 +6,8 @@ the last round, variable by variable: identical, or how many values differ.
 
 Run: .venv/bin/python benchmarks/bench_against.py EXAMPLE --against DIR [--rounds N]
      [--set KEY=VALUE ...] [--label WHAT]
-     (writes benchmarks/results/against_EXAMPLE[_WHAT][_SETTINGS].json)
+     (writes benchmarks/results/against_EXAMPLE[_WHAT][_SETTINGS].json; EXAMPLE is a
+     built-in example's name or a spec file, e.g. benchmarks/specs/*.toml)
 
 ``--set`` changes the example's spec (``method.starts=1``), for the same comparison at
 another setting.
@@ -83,8 +84,11 @@ def main() -> None:
     parser.add_argument("--label", default="", help="what changed: names the result file")
     args = parser.parse_args()
     here, there = str(HERE.parent), str(Path(args.against).resolve())
-    text = subprocess.run([SWEEP, "examples", args.example], check=True,
-                          capture_output=True, text=True).stdout
+    given = Path(args.example)
+    text = (given.read_text() if given.suffix == ".toml" and given.is_file() else
+            subprocess.run([SWEEP, "examples", args.example], check=True,
+                           capture_output=True, text=True).stdout)
+    args.example = given.stem
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         spec = tmp / "spec.toml"

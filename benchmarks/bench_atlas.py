@@ -5,7 +5,8 @@ netCDF write, summary; the imports are paid before, by the warm-up).
 
 Run: .venv/bin/python benchmarks/bench_atlas.py [SPEC ...]
      (default: the 10^6-point rotor-model sweep and the 10^4-point blade sweep in
-     benchmarks/specs/; rotary_pendulum_blade_1e5.toml is the 10^5-point one,
+     benchmarks/specs/; rotary_pendulum_blade_1e5.toml and _1e6.toml are the 10^5- and
+     10^6-point ones,
      impact_machine_1e4.toml the machine's; the results of the specs run replace theirs
      in benchmarks/results/atlas.json)
 """

@@ -1,25 +1,32 @@
-"""The integrator's step against C: nanoseconds per design-step of the rigid pendulum
-psi'' = -Omega^2 sin psi under DOPRI5 at rtol 1e-8 (the kernel's embedded error and PI
-controller), 4096 designs over 20 rotor radians each, in one run:
+"""The integrator's step against C: nanoseconds of CPU time per design-step of the rigid
+pendulum psi'' = -Omega^2 sin psi under DOPRI5 at rtol 1e-8 (the kernel's embedded error and
+PI controller), 4096 designs over 20 rotor radians each, and of the kernel's integrated
+flights with everything around them, in one run:
 
 - ``numba scalar``: the kernel's own step (``kernels.impact.runge_kutta``) and controller,
   one design after another;
 - ``C scalar``: the same loop in C (benchmarks/c/rigid_dopri5.c), gcc -O3 -march=native;
 - ``C SIMD``: 8 designs at once, each lane with its own step size, retiring at the end of
-  its interval, with glibc's vector sine (gcc -O3 -march=native -ffast-math -fopenmp-simd).
+  its interval, with glibc's vector sine (gcc -O3 -march=native -ffast-math -fopenmp-simd);
+- ``integrated flight, <example>``: the blade examples' designs (rigid striker; rotor
+  model, the stability example's) to their steady states by forced DOPRI5 at the same
+  rtol, through the sweep's kernel: events located and polished, impacts, slides, sections
+  and the peak, per step the kernel counts (accepted and rejected, its ``n_steps``).
 
-The three take the same steps (the counts are checked) and reach the same states (the C
-checksums within 1e-9 of the kernel's). Best of 5 repeats each; the C programs are
-compiled here, into a temporary directory.
+The first three take the same steps (the counts are checked) and reach the same states (the
+C checksums within 1e-9 of the kernel's). CPU time (the C programs time their loops on
+their own process's CPU clock), interleaved rounds, the median of each.
 
-Run: .venv/bin/python benchmarks/bench_step.py   (writes benchmarks/results/step.json)
+Run: .venv/bin/python benchmarks/bench_step.py [--rounds N]
+     (writes benchmarks/results/step.json)
 """
 
 from __future__ import annotations
 
+import argparse
 import json
-import math
 import os
+import statistics
 import platform
 import shutil
 import subprocess
@@ -33,7 +40,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
-N, T, REPEATS = 4096, 20.0, 5
+N, T, RTOL, ATOL = 4096, 20.0, 1e-8, 1e-10
+#: the examples whose designs the integrated flights fly
+FLIGHT_EXAMPLES = ("rotary_pendulum_blade", "rotary_pendulum_stability")
 SOURCE = HERE / "c" / "rigid_dopri5.c"
 BUILDS = {"plain": ["-O3", "-march=native"],
           "simd": ["-O3", "-march=native", "-ffast-math", "-fopenmp-simd"]}
@@ -65,7 +74,7 @@ def kernel_loop():
             while t < t_end:
                 if t + h > t_end:
                     h = t_end - t
-                y1, f1, err = step(METHOD_DOPRI5, y, f, h, p, 1e-8, 1e-10)
+                y1, f1, err = step(METHOD_DOPRI5, y, f, h, p, RTOL, ATOL)
                 steps += 1
                 if err <= 1.0:
                     t, y, f = t + h, y1, f1
@@ -80,16 +89,45 @@ def kernel_loop():
     return run
 
 
-def c_loops(tmp: Path):
-    """{loop: (steps, ns per design-step, checksum)} from the two C builds."""
+def integrated_flights(example: str):
+    """``run() -> steps``: the example's designs (its grid, regime outputs only) to their
+    steady states by the sweep's kernel under DOPRI5 at RTOL, ATOL."""
+    import tomllib
+
+    from sweep import engine, spec
+
+    path = Path(spec.__file__).parent / "example_specs" / f"{example}.toml"
+    raw = tomllib.loads(path.read_text())
+    raw.pop("outputs", None), raw.pop("chart", None)
+    raw["method"] = {"integrator": "dopri5", "rtol": RTOL, "atol": ATOL,
+                     **{k: v for k, v in raw["method"].items() if k == "max_impacts"}}
+    sweep = spec.validate(raw)
+    params = engine.block_parameters(sweep, [(0, n) for n in sweep.shape])
+
+    def run():
+        out = sweep.kernel(params, sweep.method_record)[0]
+        return int(np.nansum(out[sweep.mechanism.output_index.n_steps]))
+
+    return run
+
+
+def build_c(tmp: Path) -> dict:
+    """{build: executable} of the two C builds."""
     cc = shutil.which("gcc") or shutil.which("cc")
     if cc is None:
         raise SystemExit("bench_step: no C compiler (gcc) on this machine")
-    found = {}
+    built = {}
     for build, flags in BUILDS.items():
-        exe = tmp / f"rigid_dopri5_{build}"
-        subprocess.run([cc, *flags, "-o", str(exe), str(SOURCE), "-lm"], check=True)
-        text = subprocess.run([str(exe), str(N), str(T), str(REPEATS)], check=True,
+        built[build] = tmp / f"rigid_dopri5_{build}"
+        subprocess.run([cc, *flags, "-o", str(built[build]), str(SOURCE), "-lm"], check=True)
+    return built
+
+
+def c_loops(built: dict) -> dict:
+    """{loop: (steps, CPU ns per design-step, checksum)} of one run of each C build."""
+    found = {}
+    for build, exe in built.items():
+        text = subprocess.run([str(exe), str(N), str(T), "1"], check=True,
                               capture_output=True, text=True).stdout
         for line in text.splitlines():
             name, steps, ns, checksum = line.split()
@@ -98,32 +136,53 @@ def c_loops(tmp: Path):
     return found
 
 
+def cpu_ns_per_step(run) -> tuple[int, float]:
+    """(steps, CPU ns per step) of one call of ``run() -> steps``."""
+    t = time.process_time()
+    steps = run()
+    return steps, 1e9 * (time.process_time() - t) / steps
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=5)
+    rounds = parser.parse_args().rounds
     w2, v = designs()
-    run = kernel_loop()
+    loop = kernel_loop()
     out = np.empty(N)
-    run(w2[:8], v[:8], T, out[:8])  # compile
-    best = math.inf
-    for _ in range(REPEATS):
-        t = time.perf_counter()
-        steps = run(w2, v, T, out)
-        best = min(best, time.perf_counter() - t)
-    numba_ns, checksum = 1e9 * best / steps, float(out.sum())
+    loops = {"numba scalar": lambda: loop(w2, v, T, out)}
+    for example in FLIGHT_EXAMPLES:
+        loops[f"integrated flight, {example}"] = integrated_flights(example)
+    for run in loops.values():
+        run()  # compiles, or loads the cache
+    samples = {label: [] for label in [*loops, "C scalar", "C SIMD"]}
+    counts = {}
     with tempfile.TemporaryDirectory() as tmp:
-        c = c_loops(Path(tmp))
-    results = {"numba scalar": {"steps": steps, "ns_per_design_step": round(numba_ns, 1)}}
-    for name, label in (("c_scalar", "C scalar"), ("c_simd", "C SIMD")):
-        c_steps, ns, c_sum = c[name]
-        if c_steps != steps or abs(c_sum - checksum) > 1e-9 * abs(checksum):
-            raise SystemExit(f"bench_step: {label} took {c_steps} steps to {c_sum!r}, "
-                             f"the kernel {steps} to {checksum!r}")
-        results[label] = {"steps": c_steps, "ns_per_design_step": round(ns, 1)}
+        built = build_c(Path(tmp))
+        for _ in range(rounds):
+            for label, run in loops.items():
+                counts[label], ns = cpu_ns_per_step(run)
+                samples[label].append(ns)
+            checksum = float(out.sum())
+            for name, label in (("c_scalar", "C scalar"), ("c_simd", "C SIMD")):
+                c_steps, ns, c_sum = c_loops(built)[name]
+                if (c_steps != counts["numba scalar"]
+                        or abs(c_sum - checksum) > 1e-9 * abs(checksum)):
+                    raise SystemExit(f"bench_step: {label} took {c_steps} steps to {c_sum!r}, "
+                                     f"the kernel {counts['numba scalar']} to {checksum!r}")
+                counts[label] = c_steps
+                samples[label].append(ns)
+    results = {label: {"steps": counts[label],
+                       "ns_per_design_step": round(statistics.median(ns), 1),
+                       "rounds_ns": [round(x, 1) for x in ns]}
+               for label, ns in samples.items()}
     base = results["C SIMD"]["ns_per_design_step"]
     for label, r in results.items():
         r["over_c_simd"] = round(r["ns_per_design_step"] / base, 2)
-        print(f"{label:13s} {r['ns_per_design_step']:7.1f} ns per design-step "
+        print(f"{label:50s} {r['ns_per_design_step']:7.1f} ns per design-step "
               f"({r['over_c_simd']:.2f}x the SIMD C loop)")
     record = {"what": __doc__.strip().splitlines()[0], "designs": N, "rotor_radians": T,
+              "rtol": RTOL, "atol": ATOL, "rounds": rounds,
               "machine": platform.processor() or platform.machine(), "cpus": os.cpu_count(),
               "results": results}
     (HERE / "results" / "step.json").write_text(json.dumps(record, indent=2) + "\n")

@@ -531,7 +531,7 @@ def test_a_failed_fixed_point_jump_keeps_the_secant_jacobian():
     from kernels.impact.impact_map import Acceleration, make_accelerators
     from kernels.pendulum import systems
 
-    contact = systems.CONTACTS["rotor", "rotor_stop"]
+    contact = systems.CONTACTS["rotor", "rotor_stop", False]
     inner, first = make_accelerators(contact)[1], contact.first
 
     @njit

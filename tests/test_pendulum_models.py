@@ -18,7 +18,7 @@ from kernels.pendulum.accuracy import exact_settings
 from kernels.pendulum.dispatch import USED_CLOSED
 from kernels.pendulum.models import rigid_exact
 from kernels.pendulum.cases import CASE_COLUMNS, N_ROW
-from kernels.pendulum.systems import ENTRY_POINTS, settings_for
+from kernels.pendulum.systems import entry_point, settings_for
 from kernels.pendulum.table import BY_CODES
 from kernels.pendulum.tools import SECTION_MIN_FLIGHT
 from tests.conftest import kernel_point, kernel_points
@@ -57,7 +57,7 @@ def section_log(sections, rtol=1e-11, atol=None, exact_tol=None, **design):
     else:
         settings = settings_for(system, METHOD_DOPRI5, rtol,
                                 rtol * 1e-2 if atol is None else atol, 0.002, sections - 1)
-    ENTRY_POINTS[system](case, settings, rows, np.empty_like(rows), log)
+    entry_point(system, settings.method)(case, settings, rows, np.empty_like(rows), log)
     return log
 
 

@@ -15,7 +15,7 @@ import pytest
 from numba import njit
 
 from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings
-from kernels.impact.runge_kutta import METHOD_DOPRI5
+from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5
 from kernels.pendulum import dispatch, models, systems, table, tools
 from kernels.pendulum.cases import CASE_COLUMNS, N_ROW, ROW, C
 from kernels.rotary_pendulum import DECLARATION
@@ -75,8 +75,8 @@ def test_a_toy_surface_through_the_table_is_the_rotor_stop_mirrored(model):
                         starts=1)
     toy = np.empty((n, N_ROW))
     toy_entry(model)(stop, settings, toy, np.empty_like(toy), np.empty((1, 2)))
-    builtin = dispatch.solve_system(systems.ENTRY_POINTS[table.BY_CODES[table.MODELS[model],
-                                                                          0]], stop, settings)
+    builtin = dispatch.solve_system(systems.entry_point(table.BY_CODES[table.MODELS[model], 0],
+                                                        METHOD_DOPRI5), stop, settings)
     values = [ROW.amplitude, ROW.interval, ROW.speed, ROW.acceleration, ROW.frequency]
     np.testing.assert_array_equal(toy[cycle, ROW.outcome], SEQUENCE_CYCLE)
     np.testing.assert_allclose(toy[np.ix_(cycle, values)], closed[np.ix_(cycle, values)],
@@ -87,15 +87,42 @@ def test_a_toy_surface_through_the_table_is_the_rotor_stop_mirrored(model):
     np.testing.assert_array_equal(toy[~cycle, ROW.outcome], builtin[~cycle, ROW.outcome])
 
 
+def test_dop853_compiled_in_or_not_dopri5_takes_the_same_steps():
+    """The entry points without DOP853 (the default's: it is compiled only for the blocks
+    that ask for it) give DOPRI5's bits to the last digit, and step by DOPRI5 where DOP853
+    is asked for (runge_kutta.low_order); the ones with it do integrate by DOP853."""
+    rng = np.random.default_rng(40)
+    n = 12
+    k, xi, r = rng.uniform(0.5, 3.0, n), rng.uniform(1.0, 8.0, n), rng.uniform(0.0, 0.4, n)
+    stop = cases_of("paper", k, xi, np.zeros(n), r)
+    row = table.BY_CODES[table.MODELS["paper"], table.TOOLS["rotor_stop"]]
+
+    def rows(method, high):
+        settings = systems.settings_for(row, method, 1e-10, 1e-12, 0.0, 200)
+        return dispatch.solve_system(systems.ENTRY_POINTS[row, False, high], stop, settings)
+
+    dopri5 = rows(METHOD_DOPRI5, False)
+    assert (dopri5[:, ROW.outcome] == SEQUENCE_CYCLE).sum() >= n // 2
+    np.testing.assert_array_equal(rows(METHOD_DOPRI5, True), dopri5)
+    np.testing.assert_array_equal(rows(METHOD_DOP853, False), dopri5)
+    dop853 = rows(METHOD_DOP853, True)
+    stepped = dopri5[:, ROW.steps] > 0  # an escape decided before a flight takes none
+    assert stepped.sum() >= n // 2
+    assert np.all(dop853[stepped, ROW.steps] < dopri5[stepped, ROW.steps] / 2)
+
+
 def test_entry_points_and_dispatch_follow_the_table():
-    """One entry point per row, a tangent one exactly where the row says the multipliers
-    need it, each compiled function named after its row; the row's flags agree with what
-    its contact and model do."""
+    """One entry point per row and method order, a tangent one exactly where the row says
+    the multipliers need it, each compiled function named after its row; the row's flags
+    agree with what its contact and model do."""
     for row in table.SYSTEMS:
-        entry = systems.ENTRY_POINTS[row]
-        assert entry.py_func.__name__ == table.entry_name(row)
-        assert (row in systems.TANGENT_ENTRY_POINTS) == row.tangent
-        contact = systems.CONTACTS[row.model, row.tool]
+        for method, high in ((METHOD_DOPRI5, False), (METHOD_DOP853, True)):
+            for tangent in (False, True):
+                entry = systems.entry_point(row, method, tangent)
+                assert entry.py_func.__name__ == table.entry_name(row, tangent and row.tangent,
+                                                                  high)
+            assert ((row, True, high) in systems.ENTRY_POINTS) == row.tangent
+        contact = systems.CONTACTS[row.model, row.tool, False]
         model = getattr(models, row.model.upper())
         assert (contact.pressed is not tools.never) == row.slide
         assert contact.smooth == (row.tool == "rotor_stop")

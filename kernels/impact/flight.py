@@ -64,11 +64,11 @@ def _no_length(y, p, length):
 def make_flight(system):
     """The flight loop of a system (see the module docstring): ``(flight, step)``."""
     rhs, monitor, on_event = system.rhs, system.monitor, system.on_event
-    step = make_stepper(rhs, system.scales, system.exact)
+    step = make_stepper(rhs, system.scales, system.exact, system.high_order)
     locate = make_locator(system.event_values, system.event_rates, system.directions, step)
     polish = make_polish(system.event_values, system.event_rates, step)
     turning_angle = make_turning_angle(monitor, step)
-    track_peak, final_peak = make_peak(monitor, step)
+    track_peak, final_peak = make_peak(monitor, step, system.high_order)
     start_step, next_step, events_at, coast_on = make_step_control(system)
 
     @njit(**INNER_OPTIONS)
@@ -254,10 +254,12 @@ def make_turning_angle(monitor, step):
     return turning_angle
 
 
-def make_peak(monitor, step):
+def make_peak(monitor, step, high_order=True):
     """The largest |monitored acceleration| of a flight, with ``refine``: ``track_peak``
     keeps, step by step, the step around the largest value and a bracket in it;
-    ``final_peak`` refines it by golden section at the flight's end."""
+    ``final_peak`` refines it by golden section at the flight's end. ``high_order``: the
+    stepper has DOP853, whose samples are taken again on exact partial steps (without it
+    that code is not compiled)."""
 
     @njit(**INNER_OPTIONS)
     def acceleration_at(s, data):
@@ -284,10 +286,12 @@ def make_peak(monitor, step):
         spacing = upto / (PEAK_SAMPLES + 1)
         for j in range(1, PEAK_SAMPLES + 1):
             s = spacing * j
-            if exact:
-                ys, fs, _ = step(method, y, f, s, p, 1.0, 1.0)
-                a = abs(monitor(t + s, ys, fs)[2])
-            else:
+            a = -1.0
+            if high_order:  # a test of its own, so that without it numba prunes the branch
+                if exact:
+                    ys, fs, _ = step(method, y, f, s, p, 1.0, 1.0)
+                    a = abs(monitor(t + s, ys, fs)[2])
+            if a < 0.0:
                 a = abs(monitor(t + s, hermite(s, h, y, f, y1, f1),
                                 hermite_slope(s, h, y, f, y1, f1))[2])
             if a > best:
@@ -305,8 +309,9 @@ def make_peak(monitor, step):
         # value so far, they are taken again on exact partial steps (the interpolant's pick
         # missed the peak's bracket: 7.5e-5 low at rtol 1e-11 on a rotor design on the
         # blade, 6.9e-4 at rtol 1e-6 on its stop)
-        if method == METHOD_DOP853 and inside >= PEAK_EXACT_FRACTION * best_value:
-            inside, lo, hi = step_peak(t, h, y, f, y1, f1, upto, p, method, bool(True))
+        if high_order:
+            if method == METHOD_DOP853 and inside >= PEAK_EXACT_FRACTION * best_value:
+                inside, lo, hi = step_peak(t, h, y, f, y1, f1, upto, p, method, bool(True))
         if best[4] == 0.0:  # still the start (an impact): a maximum just after it
             best = (y, f, y1, f1, h, t, 0.0, upto / (PEAK_SAMPLES + 1))
         if inside > best_value:

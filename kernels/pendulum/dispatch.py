@@ -51,10 +51,8 @@ def _integrated(system, cases, method, stability, starts):
     from kernels.pendulum import systems
     from kernels.pendulum.systems import section_repeat_tol
 
-    entries = systems.TANGENT_ENTRY_POINTS if stability else systems.ENTRY_POINTS
-    entry = entries.get(system, systems.ENTRY_POINTS[system])
-
     def solve(sub, method_code, rtol, atol, dt, finer_by=0.0):
+        entry = systems.entry_point(system, method_code, stability)
         return solve_system(entry, sub, systems.settings_for(
             system, method_code, rtol, atol, dt, method.max_impacts, starts, finer_by),
             first_stage=finer_by > 0.0)

@@ -2,9 +2,10 @@
 core's impact map specialised to it, and a block function that solves the cases of one
 system.
 
-Each system's entry point is made here from the table, module level (numba caches it on
-disk), and compiled only when a sweep has a case of its system: a sweep of the paper model
-on the rotor stop never compiles the rotor model on the blade.
+Each system's entry points are made here from the table, module level (numba caches them
+on disk), and compiled only when a sweep has a case of its system and method: a sweep of the
+paper model on the rotor stop never compiles the rotor model on the blade, and one by DOPRI5
+never compiles DOP853 (``entry_point``).
 """
 
 import math
@@ -15,7 +16,7 @@ from numba import njit
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact.impact_map import ATTRACTOR_TOL, KNOWN, make_impact_map, with_cost
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_MAX_STEPS, Settings, add
-from kernels.impact.runge_kutta import METHOD_RK4
+from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_RK4, low_order
 from kernels.pendulum import models, tools
 from kernels.pendulum.cases import C, ROW
 from kernels.pendulum.table import RETURNING_TOOLS, SYSTEMS, entry_name
@@ -62,7 +63,8 @@ def lab_window_data(case):
 MAX_KEY = 3
 
 
-def make_block(contact, jump_early, parameters, data_of, frequency, stability=False):
+def make_block(contact, jump_early, parameters, data_of, frequency, stability=False,
+               high_order=True):
     """The block function of a system, ``block(cases, settings, rows, first_rows, log)``:
     each case's steady state into its row (ROW), and into ``log`` the section impacts
     (rotor angle mod 2 pi, psi) of the last case. ``frequency``: whether flights end where
@@ -72,7 +74,9 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     from starts - 1 more starting states (the tool's ``first``), and the distinct
     attractors they reach are counted. With ``settings.finer_by`` > 1 each sequence that
     reaches a cycle goes on from it at rtol and atol finer_by times smaller: ``rows`` get
-    that second stage's values, ``first_rows`` the first's (else the same)."""
+    that second stage's values, ``first_rows`` the first's (else the same). Without
+    ``high_order`` (a contact whose flights have no DOP853) DOP853 asked for is DOPRI5
+    (runge_kutta.low_order), its step-size control included."""
     driver = make_impact_map(contact, jump_early, stability)
     steady, settle = driver.steady, driver.settle
 
@@ -102,12 +106,10 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
 
     @njit(**INNER_OPTIONS)
     def block(cases, settings, rows, first_rows, log):
+        method = settings.method if high_order else low_order(settings.method)
         finer_by = max(settings.finer_by, 1.0)
-        finer = Settings(method=settings.method, rtol=settings.rtol / finer_by,
-                         atol=settings.atol / finer_by, dt=settings.dt,
-                         max_steps=settings.max_steps, horizon=settings.horizon,
-                         max_impacts=settings.max_impacts, starts=settings.starts,
-                         verdict_from=settings.verdict_from, finer_by=0.0)
+        finer = scaled_settings(settings, method, finer_by, 0.0)
+        settings = scaled_settings(settings, method, 1.0, settings.finer_by)
         tols = (section_repeat_tol(settings.method, settings.rtol),
                 section_repeat_tol(finer.method, finer.rtol))
         starts = settings.starts
@@ -147,6 +149,14 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
             write_row(first_rows[c], first, first.cost, attractors, basin, frequency)
 
     return block
+
+
+@njit(**INLINE_OPTIONS)
+def scaled_settings(s, method, by, finer_by):
+    """Settings ``s`` by ``method`` at rtol and atol ``by`` times smaller."""
+    return Settings(method=method, rtol=s.rtol / by, atol=s.atol / by, dt=s.dt,
+                    max_steps=s.max_steps, horizon=s.horizon, max_impacts=s.max_impacts,
+                    starts=s.starts, verdict_from=s.verdict_from, finer_by=finer_by)
 
 
 @njit(**INLINE_OPTIONS)
@@ -204,9 +214,11 @@ def _same_attractor(seen, a, b, n_keys):
 PARAMETERS = {"paper": paper_parameters, "rigid": rigid_parameters,
                "rotor": rotor_parameters}
 DATA = {"rotor_stop": rotor_stop_data, "lab_window": lab_window_data}
-#: each system's contact (the core's description of it), by the table's names
-CONTACTS = {(s.model, s.tool): getattr(tools, s.tool)(getattr(models, s.model.upper()))
-            for s in SYSTEMS}
+#: each system's contact (the core's description of it), by the table's names, without and
+#: with DOP853 in its flights
+CONTACTS = {(s.model, s.tool, high): getattr(tools, s.tool)(getattr(models, s.model.upper()),
+                                                            high)
+            for s in SYSTEMS for high in (False, True)}
 #: a flight's step budget
 MAX_STEPS = 10 ** 6
 #: the first section count at which a sequence may be called not periodic before its
@@ -214,12 +226,15 @@ MAX_STEPS = 10 ** 6
 VERDICT_FROM = 64
 
 
-def build_block(system, contact, parameters, data_of, stability=False, returning=None):
+def build_block(system, contact, parameters, data_of, stability=False, returning=None,
+                high_order=True):
     """The block function of a table row (kernels/pendulum/table.py) from its contact,
     its parameters and system data of a case; ``returning``: whether its flights end
-    where they started (default: its tool is one of table.RETURNING_TOOLS)."""
+    where they started (default: its tool is one of table.RETURNING_TOOLS);
+    ``high_order``: whether the contact's flights have DOP853 (make_block)."""
     returning = system.tool in RETURNING_TOOLS if returning is None else returning
-    return make_block(contact, system.affine, parameters, data_of, returning, stability)
+    return make_block(contact, system.affine, parameters, data_of, returning, stability,
+                      high_order)
 
 
 #: a module-level entry point: numba caches a function on disk by its name and source
@@ -236,22 +251,30 @@ def _entry_point(name: str, block):
     return namespace[name]
 
 
-#: the entry point of each system (a table row), and with the tangent of each that needs
-#: it for its multipliers (elsewhere they are known in closed form)
-ENTRY_POINTS, TANGENT_ENTRY_POINTS = {}, {}
+#: the entry points of each system (a table row) by (system, tangent, high_order): with the
+#: tangent where its multipliers need it (elsewhere they are known in closed form), and
+#: with DOP853 compiled in (its code made the first run of every example 1.02-1.06x longer)
+ENTRY_POINTS = {}
 for _system in SYSTEMS:
-    _args = (_system, CONTACTS[_system.model, _system.tool], PARAMETERS[_system.model],
-             DATA[_system.tool])
-    ENTRY_POINTS[_system] = _entry_point(entry_name(_system), build_block(*_args))
-    if _system.tangent:
-        TANGENT_ENTRY_POINTS[_system] = _entry_point(entry_name(_system, True),
-                                                     build_block(*_args, stability=True))
+    for _high in (False, True):
+        _args = (_system, CONTACTS[_system.model, _system.tool, _high],
+                 PARAMETERS[_system.model], DATA[_system.tool])
+        for _tangent in (False, True) if _system.tangent else (False,):
+            ENTRY_POINTS[_system, _tangent, _high] = _entry_point(
+                entry_name(_system, _tangent, _high),
+                build_block(*_args, stability=_tangent, high_order=_high))
+
+
+def entry_point(system, method, tangent=False):
+    """The entry point that solves a system (a table row) by ``method`` (a core method
+    code), with the tangent for the multipliers where asked for and the system needs it."""
+    return ENTRY_POINTS[system, tangent and system.tangent, method == METHOD_DOP853]
 
 
 def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1, finer_by=0.0):
     """The Settings of a solve on a system (a table row), by name."""
     return Settings(method=int(method), rtol=float(rtol), atol=float(atol), dt=float(dt),
                     max_steps=MAX_STEPS,
-                    horizon=float(CONTACTS[system.model, system.tool].horizon),
+                    horizon=float(CONTACTS[system.model, system.tool, False].horizon),
                     max_impacts=int(max_impacts), starts=int(starts),
                     verdict_from=VERDICT_FROM, finer_by=float(finer_by))

@@ -48,9 +48,12 @@ SYSTEMS = tuple(PendulumSystem(*row) for row in (
 BY_CODES = {(MODELS[s.model], TOOLS[s.tool]): s for s in SYSTEMS}
 
 
-def entry_name(system: PendulumSystem, tangent: bool = False) -> str:
-    """The name of a system's compiled entry point: ``<model>_on_<tool>[_tangent]``."""
-    return f"{system.model}_on_{system.tool}" + ("_tangent" if tangent else "")
+def entry_name(system: PendulumSystem, tangent: bool = False,
+               high_order: bool = False) -> str:
+    """The name of a system's compiled entry point: ``<model>_on_<tool>[_tangent][_dop853]``
+    (with the tangent; with DOP853 compiled in)."""
+    return (f"{system.model}_on_{system.tool}" + ("_tangent" if tangent else "")
+            + ("_dop853" if high_order else ""))
 
 
 def with_closed_form(given_models, given_tools) -> bool:

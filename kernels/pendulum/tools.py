@@ -136,9 +136,10 @@ def _gap_acceleration_change(model):
     return change
 
 
-def stop_flight(model):
+def stop_flight(model, high_order=True):
     """The free flight of a pendulum below a stop fixed on the rotor at psi = data[0]:
-    events 0, the stop (psi rising through it), and 1, escape (psi falling through -pi)."""
+    events 0, the stop (psi rising through it), and 1, escape (psi falling through -pi);
+    ``high_order``: DOP853 compiled in (System)."""
     psi_of, monitor = model.psi, model.monitor
 
     @njit(**INLINE_OPTIONS)
@@ -160,15 +161,16 @@ def stop_flight(model):
         return rate, accel
 
     return make_flight(System(model.rhs, model.scales, values, rates, (1, -1), on_event,
-                              start_gap, monitor))[0]
+                              start_gap, monitor, high_order=high_order))[0]
 
 
-def rotor_stop(model):
-    """The rotor stop composed with a model (see the module docstring)."""
+def rotor_stop(model, high_order=True):
+    """The rotor stop composed with a model (see the module docstring); ``high_order``:
+    DOP853 compiled into its flights (System)."""
     psi_of, dpsi_of = model.psi, model.dpsi
     critical_speed, accelerations = model.critical_speed, model.accelerations
     compose, rotor_angle, rotor_speed = model.compose, model.rotor_angle, model.rotor_speed
-    flight = stop_flight(model)
+    flight = stop_flight(model, high_order)
 
     @njit(**INLINE_OPTIONS)
     def first(p, data, start):
@@ -311,7 +313,7 @@ def _kinematic_slide(model, free_gap_acceleration):
     return slide, _fixed_exit_tangent
 
 
-def _constrained_slide(model, gap_change):
+def _constrained_slide(model, gap_change, high_order):
     """The slide of a rotor of finite inertia: a flight of the constrained system (psi,
     psi') on the face G = level, the rotor angle phi1 = level - beta(psi) and speed -h psi';
     psi'' keeps G'' = 0 with the contact force along J = (1, h), until the pressing
@@ -374,7 +376,7 @@ def _constrained_slide(model, gap_change):
 
     slide_flight, _ = make_flight(System(slide_rhs, relative_scales, slide_values,
                                          slide_rates, (-1, 1), slide_on_event, slide_start,
-                                         slide_monitor))
+                                         slide_monitor, high_order=high_order))
 
     @njit(**INNER_OPTIONS)
     def slide(t, y, data, p, settings, refine):
@@ -502,8 +504,9 @@ def _swing_coast(model):
     return coast
 
 
-def lab_window(model):
-    """The lab-fixed blade composed with a model (see the module docstring)."""
+def lab_window(model, high_order=True):
+    """The lab-fixed blade composed with a model (see the module docstring); ``high_order``:
+    DOP853 compiled into its flights (System)."""
     psi_of, dpsi_of, monitor = model.psi, model.dpsi, model.monitor
     compose, rotor_angle, rotor_speed = model.compose, model.rotor_angle, model.rotor_speed
     accelerations, response = model.accelerations, model.response
@@ -552,7 +555,7 @@ def lab_window(model):
     free_flight, _ = make_flight(System(model.rhs, model.scales, values, rates, (1, -1, 1),
                                         on_event, start_gap, monitor,
                                         _swing_coast(model) if model.driven else no_coast,
-                                        model.exact, model.exact_length))
+                                        model.exact, model.exact_length, high_order))
     shift = model.shift
 
     @njit(**INNER_OPTIONS)
@@ -581,7 +584,7 @@ def lab_window(model):
     if model.driven:
         slide, slide_tangent = _kinematic_slide(model, free_gap_acceleration)
     else:
-        slide, slide_tangent = _constrained_slide(model, gap_change)
+        slide, slide_tangent = _constrained_slide(model, gap_change, high_order)
 
     @njit(**INLINE_OPTIONS)
     def first(p, data, start):
