@@ -5,10 +5,11 @@ what a new user waits for once; the target is at most 20 s per example.
 
 Run: .venv/bin/python benchmarks/bench_compile.py [--rounds N] [EXAMPLE ...]
      (writes benchmarks/results/compile.json)
-     .venv/bin/python benchmarks/bench_compile.py --against DIR [--rounds N] [EXAMPLE ...]
+     .venv/bin/python benchmarks/bench_compile.py --against DIR [--rounds N] [--label LABEL]
+     [EXAMPLE ...]
      (a redesign's first run against another checkout's tree DIR, e.g. a `git worktree` of
      the commit before: cold runs of both, interleaved, on the child processes' CPU time;
-     writes benchmarks/results/compile_against.json)
+     writes benchmarks/results/compile_against[_LABEL].json, with --label LABEL)
 """
 
 from __future__ import annotations
@@ -54,9 +55,10 @@ def example_spec(name: str, folder: Path) -> Path:
     return spec
 
 
-def against(names: list[str], tree: str, rounds: int) -> None:
+def against(names: list[str], tree: str, rounds: int, label: str = "") -> None:
     """Cold first runs of this tree and of ``tree``, interleaved, in CPU seconds."""
-    path = HERE.joinpath("results", "compile_against.json")
+    path = HERE.joinpath("results", "compile_against" + (f"_{label}" if label else "")
+                         + ".json")
     result = {"machine": platform.node(), "against": tree, "rounds": rounds, "examples": {}}
     here = str(HERE.parent)
     print(f"{'example':26s} {'this CPU s':>10s} {'other CPU s':>11s} {'ratio':>6s}")
@@ -82,12 +84,14 @@ def main():
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--against", metavar="DIR",
                         help="another checkout's tree: compare cold first runs on CPU time")
+    parser.add_argument("--label", default="",
+                        help="with --against: names the result file (what is compared)")
     args = parser.parse_args()
     names = args.examples or subprocess.run(
         [SWEEP, "examples"], check=True, capture_output=True, text=True).stdout.split("\n")
     names = [line.split()[0] for line in names if line.strip()]
     if args.against:
-        return against(names, str(Path(args.against).resolve()), args.rounds)
+        return against(names, str(Path(args.against).resolve()), args.rounds, args.label)
     path = HERE.joinpath("results", "compile.json")
     # examples measured before and not now keep their record
     result = json.loads(path.read_text()) if path.exists() else {}
