@@ -2,7 +2,8 @@
 another checkout's tree (DIR, e.g. a `git worktree` of the commit before), interleaved
 (A B B A A B ...), each a whole `sweep run` process, timed on its CPU time (user + system of
 the child), after one run of each that fills its own numba cache. Then the two atlases of
-the last round, variable by variable: identical, or how many values differ.
+the last round, variable by variable: identical, or how many values differ; and the
+integration steps each took (n_steps summed).
 
 Run: .venv/bin/python benchmarks/bench_against.py EXAMPLE --against DIR [--rounds N]
      [--set KEY=VALUE ...] [--label WHAT]
@@ -75,6 +76,12 @@ def differences(a: Path, b: Path) -> dict[str, str]:
     return out
 
 
+def step_count(atlas: Path) -> float:
+    """The integration steps an atlas took in all (its n_steps), 0 where it has none."""
+    with xr.open_dataset(atlas) as x:
+        return float(np.nansum(x["n_steps"].values)) if "n_steps" in x else 0.0
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("example")
@@ -102,12 +109,16 @@ def main() -> None:
             for tree in (here, there) if r % 2 == 0 else (there, here):
                 times[tree].append(cpu_run(spec, outs[tree], tree, caches[tree]))
         diff = differences(outs[here], outs[there])
+        steps = {tree: step_count(outs[tree]) for tree in (here, there)}
     this, other = statistics.median(times[here]), statistics.median(times[there])
     record = {"example": args.example, "label": args.label, "set": args.set, "against": there,
               "rounds": args.rounds, "machine": platform.node(),
               "this_cpu_s": times[here], "other_cpu_s": times[there],
               "median_this_cpu_s": this, "median_other_cpu_s": other,
-              "ratio_other_over_this": other / this, "variables": diff}
+              "ratio_other_over_this": other / this, "steps_this": steps[here],
+              "steps_other": steps[there], "variables": diff}
+    if steps[here]:
+        record["steps_other_over_this"] = steps[there] / steps[here]
     print(f"{args.example} {' '.join(args.set)}: this {this:.1f} CPU s, other {other:.1f} "
           f"CPU s (median of {args.rounds}): {other / this:.2f}x faster")
     for name, verdict in diff.items():

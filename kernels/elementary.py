@@ -104,11 +104,11 @@ _JACOBI_SERIES_REACH = 2.0 ** -5
 @njit(**KERNEL_OPTIONS)
 def jacobi_small(u, m):
     """Jacobi's (sn, cn, dn)(u | m) for a parameter m >= 0 (m > 1 too: a pendulum over the
-    top) and |u| sqrt(max(1, m)) up to 0.5, for the exact step of a pendulum: the
+    top) and |u| sqrt(max(1, m)) up to 1, for the exact step of a pendulum: the
     Maclaurin series to u^9 at u / 2^n (n halvings bring it within _JACOBI_SERIES_REACH),
     then n doublings of sn, 1 - cn and 1 - dn, free of cancellation while cn, dn > 0 (the
     plain doubling of cn lost 6 ulp at u = 0.3 on the separatrix). Within a few ulp of
-    mpmath over |u| sqrt(max(1, m)) <= 0.5 (tests/test_elementary.py); no special case at
+    mpmath over |u| sqrt(max(1, m)) <= 1 (tests/test_elementary.py); no special case at
     m = 1 (the separatrix), where the arithmetic-geometric mean's descent stalls."""
     reach = abs(u) * math.sqrt(max(1.0, m))
     n = 0

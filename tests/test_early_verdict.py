@@ -1,17 +1,18 @@
 """Paying only for the flights a result needs (issue 40): a sequence that settles nowhere is
 called not periodic as soon as the budget's own verdict is certain (impact_map.
-settles_nowhere), checked against the long runs it replaces. (A start that stops on a cycle
-another start found, impact_map.known_attractor, is checked by the attractor counts of
-tests/test_edges.py and tests/test_stability.py, against the blade twin's starts and the
-section map's own.)"""
+settles_nowhere), checked against the long runs it replaces; a start is captured by a
+cycle another start found (impact_map.captured_by) only while it contracts onto it. (A
+start that stops on such a cycle, impact_map.known_attractor, is checked by the attractor
+counts of tests/test_edges.py and tests/test_stability.py, against the blade twin's starts
+and the section map's own.)"""
 
 import math
 
 import numpy as np
 import pytest
 
-from kernels.impact.impact_map import (MAX_PERIOD, classify_period, not_periodic,
-                                       settles_nowhere)
+from kernels.impact.impact_map import (CAPTURE_DISTANCE, KNOWN, MAX_PERIOD, captured_by,
+                                       classify_period, not_periodic, settles_nowhere)
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_NOT_PERIODIC, Settings
 from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_EXACT
 from kernels.pendulum import systems, table
@@ -144,3 +145,49 @@ def test_the_early_verdict_leaves_slowly_converging_period_n_cycles_to_the_budge
     assert np.all(long[:, ROW.outcome] == SEQUENCE_CYCLE) and np.all(long[:, ROW.period] > 1)
     values = [j for j in range(N_ROW) if j not in COUNTERS]
     np.testing.assert_array_equal(early[:, values], long[:, values])
+
+
+def known_rows(*cycles):
+    """Rows of known cycles (columns impact_map.KNOWN): (outcome, period, section state)."""
+    rows = np.zeros((len(cycles), KNOWN.key + 2))
+    for j, (outcome, period, state) in enumerate(cycles):
+        rows[j, KNOWN.outcome], rows[j, KNOWN.period] = outcome, period
+        rows[j, KNOWN.key:] = state
+    return rows
+
+
+def first_capture(history, known):
+    """The first section count at which captured_by names a row, and that row (-1, -1)."""
+    for count in range(1, len(history) + 1):
+        row = captured_by(known, history, count)
+        if row >= 0:
+            return count, row
+    return -1, -1
+
+
+def test_a_start_is_captured_only_while_it_contracts_onto_a_known_cycle():
+    """impact_map.captured_by, against sequences whose limits are known: a start that
+    spirals into a known fixed point (multipliers of modulus 0.5 to 0.85) is captured
+    within CAPTURE_DISTANCE of it, and only then; into a known period-3 cycle, on the
+    cycle's own phase; not by a cycle 5 to 50 CAPTURE_DISTANCE from its own limit (it
+    stops contracting onto it while its steps vanish), not while it converges more slowly than
+    CAPTURE_RATIO, and not by a row of a sequence that ended without a cycle."""
+    for rho in (0.5, 0.7, 0.85):
+        history = spiral(rho, 2.0)
+        count, row = first_capture(history, known_rows((SEQUENCE_CYCLE, 1, (0.0, 0.0)),
+                                                       (SEQUENCE_CYCLE, 1, (0.5, 0.5))))
+        assert row == 0
+        assert np.abs(history[count - 1]).max() <= CAPTURE_DISTANCE
+        assert np.abs(history[count - 2]).max() > CAPTURE_DISTANCE * 0.5  # not late
+        for offset in (5e-3, 1e-3, 5e-4):  # its limit is another, this far from the known
+            other = known_rows((SEQUENCE_CYCLE, 1, (offset, 0.0)))
+            assert first_capture(history, other) == (-1, -1), (rho, offset)
+        ended = known_rows((SEQUENCE_NOT_PERIODIC, 0, (0.0, 0.0)))
+        assert first_capture(history, ended) == (-1, -1)
+    assert first_capture(spiral(0.95, 0.0), known_rows((SEQUENCE_CYCLE, 1, (0.0, 0.0))))[1] == -1
+    three = to_a_three_cycle(0.6, 60)
+    count, row = first_capture(three, known_rows((SEQUENCE_CYCLE, 3, (1.0, 0.0))))
+    assert row == 0 and (count - 1) % 3 == 0
+    assert np.abs(three[count - 1] - (1.0, 0.0)).max() <= CAPTURE_DISTANCE
+    # as a fixed point, the same cycle's corner is no limit: its states never all contract
+    assert first_capture(three, known_rows((SEQUENCE_CYCLE, 1, (1.0, 0.0))))[1] == -1

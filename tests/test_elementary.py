@@ -81,8 +81,9 @@ def test_golden_section_finds_a_maximum_with_one_evaluation_per_step():
 def test_jacobi_small_against_mpmath_across_the_separatrix():
     """sn, cn, dn(u | m) at random u and m: libration (m < 1), m within 1e-16..1 of the
     separatrix, m = 0 and 1 exactly, and over the top (m up to 30), |u| sqrt(max(1, m))
-    up to 0.5 (the exact pendulum step's reach): within 2e-15 of mpmath at 40
-    digits. A wrong series coefficient or a doubling formula gives 1e-10 or worse."""
+    up to 1 (the exact pendulum step's reach where no event can fire, flight.EXACT_REACH):
+    within 2e-15 of mpmath at 40 digits. A wrong series coefficient or a doubling formula
+    gives 1e-10 or worse."""
     import mpmath
 
     mpmath.mp.dps = 40
@@ -91,7 +92,7 @@ def test_jacobi_small_against_mpmath_across_the_separatrix():
     for i in range(600):
         m = [rng.uniform(0, 1), 1 - 10 ** rng.uniform(-16, 0), rng.uniform(1, 30), 0.0,
              1.0][i % 5]
-        u = rng.uniform(-0.5, 0.5) / math.sqrt(max(1.0, m))
+        u = rng.uniform(-1.0, 1.0) / math.sqrt(max(1.0, m))
         got = jacobi_small(float(u), float(m))
         for value, name in zip(got, ("sn", "cn", "dn")):
             want = float(mpmath.re(mpmath.ellipfun(name, mpmath.mpf(u), m=mpmath.mpf(m))))

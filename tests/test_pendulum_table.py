@@ -99,7 +99,8 @@ def test_dop853_compiled_in_or_not_dopri5_takes_the_same_steps():
 
     def rows(method, high):
         settings = systems.settings_for(row, method, 1e-10, 1e-12, 0.0, 200)
-        return dispatch.solve_system(systems.ENTRY_POINTS[row, False, high], stop, settings)
+        return dispatch.solve_system(systems.ENTRY_POINTS[row, False, high, False], stop,
+                                     settings)
 
     dopri5 = rows(METHOD_DOPRI5, False)
     assert (dopri5[:, ROW.outcome] == SEQUENCE_CYCLE).sum() >= n // 2
@@ -112,16 +113,17 @@ def test_dop853_compiled_in_or_not_dopri5_takes_the_same_steps():
 
 
 def test_entry_points_and_dispatch_follow_the_table():
-    """One entry point per row and method order, a tangent one exactly where the row says
-    the multipliers need it, each compiled function named after its row; the row's flags
-    agree with what its contact and model do."""
+    """One entry point per row, method order and stages, a tangent one exactly where the
+    row says the multipliers need it, each compiled function named after its row; the
+    row's flags agree with what its contact and model do."""
     for row in table.SYSTEMS:
         for method, high in ((METHOD_DOPRI5, False), (METHOD_DOP853, True)):
-            for tangent in (False, True):
-                entry = systems.entry_point(row, method, tangent)
-                assert entry.py_func.__name__ == table.entry_name(row, tangent and row.tangent,
-                                                                  high)
-            assert ((row, True, high) in systems.ENTRY_POINTS) == row.tangent
+            for two in (False, True):
+                for tangent in (False, True):
+                    entry = systems.entry_point(row, method, tangent, two)
+                    assert entry.py_func.__name__ == table.entry_name(
+                        row, tangent and row.tangent, high, two)
+                assert ((row, True, high, two) in systems.ENTRY_POINTS) == row.tangent
         contact = systems.CONTACTS[row.model, row.tool, False]
         model = getattr(models, row.model.upper())
         assert (contact.pressed is not tools.never) == row.slide

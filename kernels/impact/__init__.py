@@ -57,13 +57,17 @@ def no_coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo):
 #: memo)``, called after a step in which the monitored angle crossed zero, the crossing's
 #: time estimated as t_cross, the crossings counted from the flight's start; skip: the time
 #: added to t, a whole number of periods, after which y and f are the same; memo: two
-#: floats the coast keeps between calls of one flight, NaN at its start); ``high_order``:
-#: whether DOP853 is compiled into its flights (runge_kutta.make_stepper; a pendulum block
-#: made without it solves by DOPRI5 where DOP853 is asked for, systems.make_block)
+#: floats the coast keeps between calls of one flight, NaN at its start); where the flow
+#: is known in closed form, ``exact(y, h, p)`` and ``exact_length(y, p, length)``, its step
+#: for runge_kutta.METHOD_EXACT; ``high_order``: whether DOP853 is compiled into its flights
+#: (runge_kutta.make_stepper; a pendulum block made without it solves by DOPRI5 where DOP853
+#: is asked for, systems.make_block); ``clear_time(t, y, data, p)``: a time within which no
+#: event can fire from (t, y) (a lower bound, from bounds on the events' rates), up to which
+#: an exact flight that refines nothing steps past exact_length
 System = namedtuple("System", ["rhs", "scales", "event_values", "event_rates", "directions",
                                "on_event", "start_gap", "monitor", "coast", "exact",
-                               "exact_length", "high_order"],
-                    defaults=(no_coast, None, None, True))
+                               "exact_length", "high_order", "clear_time"],
+                    defaults=(no_coast, None, None, True, None))
 
 #: what happens at a contact, for the impact map (impact_map.py). ``model``: the flying
 #: body's functions the map needs (namedtuple fields response(y, J_phi, J_psi, p) = M^-1 J^T

@@ -48,6 +48,10 @@ PEAK_SAMPLES = 3  # interior samples of |acceleration| per step, where the peak 
 #: states 1.6 times dearer at rtol 1e-12, 0.8 the least)
 PEAK_EXACT_FRACTION = 0.8
 TURNING_BISECTIONS = 55  # 2^-55 of a step: round-off
+#: the longest exact step (System.exact_length) of a flight that refines nothing, where no
+#: event can fire within it (System.clear_time): the reach over which the rigid pendulum's
+#: closed-form step is tested against mpmath (elementary.jacobi_small)
+EXACT_REACH = 1.0
 
 #: what a flight returns: its outcome (outcomes.FLIGHT_*), the event that ended it (-1 if
 #: none), the time, state, derivative and system data at its end, the amplitude and peak
@@ -59,6 +63,11 @@ Flight = namedtuple("Flight", ["outcome", "event", "t", "y", "f", "data", "ampli
 @njit(**INLINE_OPTIONS)
 def _no_length(y, p, length):
     return length
+
+
+@njit(**INLINE_OPTIONS)
+def _never_clear(t, y, data, p):
+    return 0.0
 
 
 def make_flight(system):
@@ -135,7 +144,8 @@ def make_flight(system):
                                                    data, p, t0 + settings.horizon, memo)
             t, y, f, angle = t + skip + h, y1, f1, angle1
             start = end if skip == 0.0 else events_at(t, y, f, data)
-            h, err_prev = next_step(y, p, settings, h, err, after_reject, err_prev)
+            h, err_prev = next_step(t, y, data, p, settings, refine, h, err, after_reject,
+                                    err_prev)
             after_reject = bool(False)
         return Flight(FLIGHT_MAX_STEPS, -1, t, y, f, data, amplitude, peak,
                       Counters(steps, rejected, events))
@@ -153,6 +163,8 @@ def make_step_control(system):
                                        system.start_gap, system.coast)
     has_exact = system.exact is not None
     exact_length = system.exact_length if has_exact else _no_length
+    has_clear = has_exact and system.clear_time is not None
+    clear_time = system.clear_time if has_clear else _never_clear
 
     @njit(**INLINE_OPTIONS)
     def start_step(t, y, f, data, p, settings, rate):
@@ -165,9 +177,16 @@ def make_step_control(system):
         return ballistic_cap(h, gap_rate, gap_acceleration)
 
     @njit(**INLINE_OPTIONS)
-    def next_step(y, p, settings, h, err, after_reject, err_prev):
+    def next_step(t, y, data, p, settings, refine, h, err, after_reject, err_prev):
         if has_exact and settings.method == METHOD_EXACT:
-            return exact_length(y, p, settings.dt), err_prev
+            h = exact_length(y, p, settings.dt)
+            # a step no event can end needs no search: as long as the events stay clear,
+            # within the exact flow's reach (EXACT_REACH); not where turning points and
+            # peaks are refined, whose search is on the step's interpolant too
+            if has_clear and not refine:
+                h = max(h, min(clear_time(t, y, data, p),
+                               exact_length(y, p, EXACT_REACH)))
+            return h, err_prev
         return accepted_step_size(settings.method, h, settings.dt, err, after_reject,
                                   err_prev)
 

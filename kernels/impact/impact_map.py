@@ -43,7 +43,8 @@ refined cycle, the whole sequence:
    slowest and fastest impact, and the smallest distance of an impact from the tool's edge;
 8. ``start`` picks the starting state (0: at rest, the tool's ``first``; others for the
    attractor count); a sequence that reaches a section state of a cycle in ``known``
-   (those other starts found, known_attractor) stops there as that cycle.
+   (those other starts found, known_attractor), or contracts onto one (captured_by),
+   stops there as that cycle.
 """
 
 import math
@@ -54,6 +55,7 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact.tangent import MAX_SECTION_DIMENSION, NO_TRACKER, make_tracker
+from kernels.impact.tuples import from_row
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_NONFINITE,
                                      FLIGHT_UNDERFLOW, NO_COST, SEQUENCE_CYCLE,
                                      SEQUENCE_DEGENERATE, SEQUENCE_ESCAPE, SEQUENCE_MAX_STEPS,
@@ -299,6 +301,50 @@ def known_attractor(known, key):
         if same:
             return a
     return -1
+
+
+#: a start is captured by a known cycle (captured_by) once its section states of the cycle's
+#: phase come within this of the cycle's, each step at most CAPTURE_RATIO of the one before;
+#: two cycles whose section states lie within about twice this of each other may then count
+#: as one attractor (a start passing that near the other's state looks captured)
+CAPTURE_DISTANCE = 1e-4
+CAPTURE_RATIO = 0.9
+
+
+@njit(**KERNEL_OPTIONS)
+def captured_by(known, history, count):
+    """The row of ``known`` (columns KNOWN) whose cycle the sequence of section states
+    ``history`` (rows 0..count-1) is contracting onto: of its last three states p apart (p
+    the cycle's period), each is nearer the cycle's state than the one before by at least
+    CAPTURE_RATIO, the last within CAPTURE_DISTANCE (relative, as ATTRACTOR_TOL); its own
+    steps shrink by CAPTURE_RATIO too, and the cycle's state lies within the reach of their
+    geometric tail (ratio/(1 - ratio) times the last): a sequence that converges elsewhere
+    stops contracting onto it, its steps vanishing while its distance stays. -1 if none."""
+    last = count - 1
+    reach = CAPTURE_RATIO / (1.0 - CAPTURE_RATIO)
+    for a in range(known.shape[0]):
+        if known[a, KNOWN.outcome] != SEQUENCE_CYCLE:
+            continue
+        p = int(known[a, KNOWN.period])
+        if last - 2 * p < 0:
+            continue
+        cycle = known[a, KNOWN.key:KNOWN.key + history.shape[1]]
+        x0, x1, x2 = history[last - 2 * p], history[last - p], history[last]
+        d0, d1, d2 = _apart(x0, cycle, cycle), _apart(x1, cycle, cycle), _apart(x2, cycle, cycle)
+        s1, s2 = _apart(x1, x0, cycle), _apart(x2, x1, cycle)
+        if (d2 <= CAPTURE_DISTANCE and d2 <= CAPTURE_RATIO * d1 and d1 <= CAPTURE_RATIO * d0
+                and s2 <= CAPTURE_RATIO * s1 and d2 <= reach * s2):
+            return a
+    return -1
+
+
+@njit(**INLINE_OPTIONS)
+def _apart(x, y, scale):
+    """max_i |x_i - y_i| / max(1, |scale_i|)."""
+    apart = 0.0
+    for i in range(x.shape[0]):
+        apart = max(apart, abs(x[i] - y[i]) / max(1.0, abs(scale[i])))
+    return apart
 
 
 @njit(**INLINE_OPTIONS)
@@ -713,6 +759,10 @@ def make_transient(c, jump_early, section):
             key = record(t, y, data, p, history, count, log)
             count += 1
             hit = known_attractor(known, key)
+            if hit < 0:  # captured on its way: the cycle's own state stands for it
+                hit = captured_by(known, history, count)
+                if hit >= 0:
+                    key = from_row(key, known[hit], int(KNOWN.key))
             period = classify_period(history, count, repeat_tol, MAX_PERIOD)
             # on a cycle found before: that attractor (its values are known); or, away from
             # the accelerators' jumps, a sequence as not periodic as its budget would find it

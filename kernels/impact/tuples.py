@@ -65,6 +65,11 @@ def relative_scales(y0, y1, rtol, atol):
     return tuple(atol + rtol * max(abs(a), abs(b)) for a, b in zip(y0, y1))
 
 
+def from_row(like, row, offset):
+    """A tuple as long as ``like`` of row[offset], row[offset + 1], ..."""
+    return tuple(row[offset + i] for i in range(len(like)))
+
+
 def _length(tup):
     return tup.count if isinstance(tup, types.UniTuple) else len(tup.types)
 
@@ -78,6 +83,12 @@ def _lincomb(y, h, coefs, ks):
     n, m = _length(y), _length(coefs)
     return _compile("lincomb", "y, h, coefs, ks",
                     _tuple([f"y[{i}] + h * ({_products(m, i)})" for i in range(n)]))
+
+
+@overload(from_row)
+def _from_row(like, row, offset):
+    return _compile("from_row", "like, row, offset",
+                    _tuple([f"row[offset + {i}]" for i in range(_length(like))]))
 
 
 @overload(weighted)

@@ -30,12 +30,14 @@ from kernels.impact.tuples import relative_scales
 
 MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR = 0, 1, 2
 
-#: the functions of a model (see the module docstring)
+#: the functions of a model (see the module docstring); where its flow is known in closed
+#: form, ``exact(y, h, p)``, ``exact_length(y, p, length)`` (its step) and
+#: ``speed_bound(y, p)`` (the largest |psi'| of the free motion from y)
 Model = namedtuple("Model", [
     "rhs", "scales", "monitor", "accelerations", "response", "rotor_angle", "rotor_speed",
     "psi", "dpsi", "compose", "critical_speed", "shift", "driven", "jacobian",
     "response_slope", "tangent_state", "tangent_coordinates", "swing", "exact",
-    "exact_length"], defaults=(None, None))
+    "exact_length", "speed_bound"], defaults=(None, None, None))
 
 #: the half period's Gauss-Legendre panels: 20 nodes each, halving towards the turning point
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
@@ -141,7 +143,8 @@ def driven_response(y, j_phi, j_psi, p):
     return 0.0, 1.0
 
 
-def driven_model(rhs, critical_speed, jacobian, swing, exact=None, exact_length=None):
+def driven_model(rhs, critical_speed, jacobian, swing, exact=None, exact_length=None,
+                 speed_bound=None):
     @njit(**INLINE_OPTIONS)
     def accelerations(t, y, p):
         return 0.0, rhs(y, p)[1]
@@ -150,7 +153,7 @@ def driven_model(rhs, critical_speed, jacobian, swing, exact=None, exact_length=
                  driven_rotor_angle, driven_rotor_speed, driven_psi, driven_dpsi,
                  driven_compose, critical_speed, driven_shift, True, jacobian,
                  driven_response_slope, driven_tangent_state, driven_tangent_coordinates,
-                 swing, exact, exact_length)
+                 swing, exact, exact_length, speed_bound)
 
 
 # ---------------------------------------------------------------- rotor of finite inertia
@@ -710,9 +713,18 @@ def rigid_exact_length(y, p, length):
     return length / max(1.0, rate)
 
 
+@njit(**INLINE_OPTIONS)
+def rigid_speed_bound(y, p):
+    """The largest |psi'| of the free motion from y: 2 Omega sqrt(m), m = sin^2(psi/2) +
+    (psi'/(2 Omega))^2 its constant energy (rigid_exact), reached at psi = 0."""
+    omega2 = p[0] * p[1]
+    x = math.sin(0.5 * y[0])
+    return math.sqrt(4.0 * omega2 * x * x + y[1] * y[1])
+
+
 PAPER = driven_model(paper_rhs, paper_critical, paper_jacobian, paper_swing)
 RIGID = driven_model(rigid_rhs, rigid_critical, rigid_jacobian, rigid_swing, rigid_exact,
-                     rigid_exact_length)
+                     rigid_exact_length, rigid_speed_bound)
 
 
 @njit(**KERNEL_OPTIONS)

@@ -14,7 +14,8 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
-from kernels.impact.impact_map import ATTRACTOR_TOL, KNOWN, make_impact_map, with_cost
+from kernels.impact.impact_map import (ATTRACTOR_TOL, KNOWN, known_attractor,
+                                       make_impact_map, with_cost)
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_MAX_STEPS, Settings, add
 from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_RK4, low_order
 from kernels.pendulum import models, tools
@@ -64,7 +65,7 @@ MAX_KEY = 3
 
 
 def make_block(contact, jump_early, parameters, data_of, frequency, stability=False,
-               high_order=True):
+               high_order=True, two_stage=True):
     """The block function of a system, ``block(cases, settings, rows, first_rows, log)``:
     each case's steady state into its row (ROW), and into ``log`` the section impacts
     (rotor angle mod 2 pi, psi) of the last case. ``frequency``: whether flights end where
@@ -76,7 +77,10 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     reaches a cycle goes on from it at rtol and atol finer_by times smaller: ``rows`` get
     that second stage's values, ``first_rows`` the first's (else the same). Without
     ``high_order`` (a contact whose flights have no DOP853) DOP853 asked for is DOPRI5
-    (runge_kutta.low_order), its step-size control included."""
+    (runge_kutta.low_order), its step-size control included. Without ``two_stage`` the
+    second stage is not compiled in, and every solve is the first stage's whatever
+    settings.finer_by: the solves that never take it (exact flights, a forced method) do
+    not pay for its compile."""
     driver = make_impact_map(contact, jump_early, stability)
     steady, settle = driver.steady, driver.settle
 
@@ -88,9 +92,13 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
         out while the sequence still converged); where the second stage does not confirm
         the first one's cycle (its period and chatter), the finer solve starts again."""
         first, t, y, d = steady(p, data, r, settings, tols[0], log, start, known)
+        if not two_stage:  # its own test, so that numba prunes the second stage away
+            return first, first
         cycle = first.outcome == SEQUENCE_CYCLE
         if settings.finer_by <= 1.0 or not (cycle or first.outcome == SEQUENCE_MAX_STEPS):
             return first, first
+        if cycle and known_attractor(known, first.key) >= 0:
+            return first, first  # on a cycle another start found: its second stage ran
         cost = first.cost
         if cycle:
             then = settle(p, d, r, finer, tols[1], scratch, t, y, known)[0]
@@ -227,14 +235,15 @@ VERDICT_FROM = 64
 
 
 def build_block(system, contact, parameters, data_of, stability=False, returning=None,
-                high_order=True):
+                high_order=True, two_stage=True):
     """The block function of a table row (kernels/pendulum/table.py) from its contact,
     its parameters and system data of a case; ``returning``: whether its flights end
     where they started (default: its tool is one of table.RETURNING_TOOLS);
-    ``high_order``: whether the contact's flights have DOP853 (make_block)."""
+    ``high_order``: whether the contact's flights have DOP853; ``two_stage``: whether
+    auto's second stage is compiled in (make_block)."""
     returning = system.tool in RETURNING_TOOLS if returning is None else returning
     return make_block(contact, system.affine, parameters, data_of, returning, stability,
-                      high_order)
+                      high_order, two_stage)
 
 
 #: a module-level entry point: numba caches a function on disk by its name and source
@@ -251,24 +260,29 @@ def _entry_point(name: str, block):
     return namespace[name]
 
 
-#: the entry points of each system (a table row) by (system, tangent, high_order): with the
-#: tangent where its multipliers need it (elsewhere they are known in closed form), and
-#: with DOP853 compiled in (its code made the first run of every example 1.02-1.06x longer)
+#: the entry points of each system (a table row) by (system, tangent, high_order,
+#: two_stage): with the tangent where its multipliers need it (elsewhere they are known in
+#: closed form), with DOP853 compiled in (its code made the first run of every example
+#: 1.02-1.06x longer), and with auto's second stage (about a tenth of the blade example's
+#: first run, whose exact flights never take it)
 ENTRY_POINTS = {}
 for _system in SYSTEMS:
     for _high in (False, True):
         _args = (_system, CONTACTS[_system.model, _system.tool, _high],
                  PARAMETERS[_system.model], DATA[_system.tool])
         for _tangent in (False, True) if _system.tangent else (False,):
-            ENTRY_POINTS[_system, _tangent, _high] = _entry_point(
-                entry_name(_system, _tangent, _high),
-                build_block(*_args, stability=_tangent, high_order=_high))
+            for _two in (False, True):
+                ENTRY_POINTS[_system, _tangent, _high, _two] = _entry_point(
+                    entry_name(_system, _tangent, _high, _two),
+                    build_block(*_args, stability=_tangent, high_order=_high, two_stage=_two))
 
 
-def entry_point(system, method, tangent=False):
+def entry_point(system, method, tangent=False, two_stage=False):
     """The entry point that solves a system (a table row) by ``method`` (a core method
-    code), with the tangent for the multipliers where asked for and the system needs it."""
-    return ENTRY_POINTS[system, tangent and system.tangent, method == METHOD_DOP853]
+    code), with the tangent for the multipliers where asked for and the system needs it,
+    and with auto's second stage where asked for (settings.finer_by)."""
+    return ENTRY_POINTS[system, tangent and system.tangent, method == METHOD_DOP853,
+                        bool(two_stage)]
 
 
 def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1, finer_by=0.0):

@@ -48,12 +48,13 @@ SYSTEMS = tuple(PendulumSystem(*row) for row in (
 BY_CODES = {(MODELS[s.model], TOOLS[s.tool]): s for s in SYSTEMS}
 
 
-def entry_name(system: PendulumSystem, tangent: bool = False,
-               high_order: bool = False) -> str:
-    """The name of a system's compiled entry point: ``<model>_on_<tool>[_tangent][_dop853]``
-    (with the tangent; with DOP853 compiled in)."""
+def entry_name(system: PendulumSystem, tangent: bool = False, high_order: bool = False,
+               two_stage: bool = False) -> str:
+    """The name of a system's compiled entry point:
+    ``<model>_on_<tool>[_tangent][_dop853][_two_stage]`` (with the tangent; with DOP853
+    compiled in; with auto's second stage)."""
     return (f"{system.model}_on_{system.tool}" + ("_tangent" if tangent else "")
-            + ("_dop853" if high_order else ""))
+            + ("_dop853" if high_order else "") + ("_two_stage" if two_stage else ""))
 
 
 def with_closed_form(given_models, given_tools) -> bool:

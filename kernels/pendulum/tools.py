@@ -552,10 +552,28 @@ def lab_window(model, high_order=True):
         g_rate = rotor_speed(y) + h_ratio(psi_of(y), k) * dpsi_of(y)
         return g_rate, free_gap_acceleration(t, y, p, k)
 
+    speed_bound = model.speed_bound
+
+    @njit(**INLINE_OPTIONS)
+    def clear_time(t, y, data, p):
+        """No event within this time (System.clear_time), nor a zero of psi (the coast
+        takes the step that holds one as the bound of its time, _swing_coast): each face's
+        gap G moves at |G'| = |phi1' + h psi'| <= |phi1'| + max|h| max|psi'|, psi and the
+        escape's |psi| - pi at |psi'| <= max|psi'| (the model's speed_bound); h is
+        monotonic in cos psi, so max|h| is its value at psi = 0 or pi, 1/|1 - k| (1/2 at
+        k = 1)."""
+        k = data[2]
+        g0, g1, g2 = values(t, y, data)
+        speed = speed_bound(y, p)
+        h_max = max(1.0 / (1.0 + k), 1.0 / abs(1.0 - k) if k != 1.0 else 0.5)
+        face = min(abs(g0), abs(g1)) / (abs(rotor_speed(y)) + h_max * speed)
+        return min(face, min(abs(g2), abs(psi_of(y))) / speed) if speed > 0.0 else face
+
     free_flight, _ = make_flight(System(model.rhs, model.scales, values, rates, (1, -1, 1),
                                         on_event, start_gap, monitor,
                                         _swing_coast(model) if model.driven else no_coast,
-                                        model.exact, model.exact_length, high_order))
+                                        model.exact, model.exact_length, high_order,
+                                        clear_time if speed_bound is not None else None))
     shift = model.shift
 
     @njit(**INNER_OPTIONS)
