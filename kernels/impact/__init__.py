@@ -61,9 +61,10 @@ def no_coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo):
 #: is known in closed form, ``exact(y, h, p)`` and ``exact_length(y, p, length)``, its step
 #: for runge_kutta.METHOD_EXACT; ``high_order``: whether DOP853 is compiled into its flights
 #: (runge_kutta.make_stepper; a pendulum block made without it solves by DOPRI5 where DOP853
-#: is asked for, systems.make_block); ``clear_time(t, y, data, p)``: a time within which no
-#: event can fire from (t, y) (a lower bound, from bounds on the events' rates), up to which
-#: an exact flight that refines nothing steps past exact_length
+#: is asked for, systems.make_block); ``clear_time(y, values_now, data, p)``: a time within
+#: which no event can fire from the state y, whose event values are ``values_now`` (a lower
+#: bound, from bounds on the events' rates), up to which an exact flight that refines
+#: nothing steps past exact_length
 System = namedtuple("System", ["rhs", "scales", "event_values", "event_rates", "directions",
                                "on_event", "start_gap", "monitor", "coast", "exact",
                                "exact_length", "high_order", "clear_time"],

@@ -66,7 +66,7 @@ def _no_length(y, p, length):
 
 
 @njit(**INLINE_OPTIONS)
-def _never_clear(t, y, data, p):
+def _never_clear(y, values_now, data, p):
     return 0.0
 
 
@@ -144,8 +144,8 @@ def make_flight(system):
                                                    data, p, t0 + settings.horizon, memo)
             t, y, f, angle = t + skip + h, y1, f1, angle1
             start = end if skip == 0.0 else events_at(t, y, f, data)
-            h, err_prev = next_step(t, y, data, p, settings, refine, h, err, after_reject,
-                                    err_prev)
+            h, err_prev = next_step(y, start[0], data, p, settings, refine, h, err,
+                                    after_reject, err_prev)
             after_reject = bool(False)
         return Flight(FLIGHT_MAX_STEPS, -1, t, y, f, data, amplitude, peak,
                       Counters(steps, rejected, events))
@@ -177,14 +177,14 @@ def make_step_control(system):
         return ballistic_cap(h, gap_rate, gap_acceleration)
 
     @njit(**INLINE_OPTIONS)
-    def next_step(t, y, data, p, settings, refine, h, err, after_reject, err_prev):
+    def next_step(y, values_now, data, p, settings, refine, h, err, after_reject, err_prev):
         if has_exact and settings.method == METHOD_EXACT:
             h = exact_length(y, p, settings.dt)
             # a step no event can end needs no search: as long as the events stay clear,
             # within the exact flow's reach (EXACT_REACH); not where turning points and
             # peaks are refined, whose search is on the step's interpolant too
             if has_clear and not refine:
-                h = max(h, min(clear_time(t, y, data, p),
+                h = max(h, min(clear_time(y, values_now, data, p),
                                exact_length(y, p, EXACT_REACH)))
             return h, err_prev
         return accepted_step_size(settings.method, h, settings.dt, err, after_reject,

@@ -118,6 +118,17 @@ Section = namedtuple("Section", ["outcome", "t", "y", "data", "chatter", "amplit
                                  "tangent_ok"])
 
 
+@njit(**INLINE_OPTIONS)
+def relative_distance(x, y, scale):
+    """max_i |x_i - y_i| / max(1, |scale_i|): how far apart two section states are, relative
+    where a component is large and absolute where it is small (the period's repeat, a
+    known attractor, a capture)."""
+    apart = 0.0
+    for i in range(len(x)):
+        apart = max(apart, abs(x[i] - y[i]) / max(1.0, abs(scale[i])))
+    return apart
+
+
 @njit(**KERNEL_OPTIONS)
 def classify_period(history, count, tol, max_period):
     """Smallest p <= max_period such that the last cycle of p states of an impact map
@@ -139,18 +150,13 @@ def classify_period(history, count, tol, max_period):
         residual = 0.0
         for q in range(p):
             a, b = last - q, last - q - p
-            for i in range(history.shape[1]):
-                residual = max(residual, abs(history[a, i] - history[b, i])
-                               / max(1.0, abs(history[a, i])))
+            residual = max(residual, relative_distance(history[a], history[b], history[a]))
         if residual > tol:
             continue
         spread = math.inf  # the closest two states of the p-cycle
         for j in range(1, p):
-            apart = 0.0
-            for i in range(history.shape[1]):
-                apart = max(apart, abs(history[last, i] - history[last - j, i])
-                            / max(1.0, abs(history[last, i])))
-            spread = min(spread, apart)
+            spread = min(spread, relative_distance(history[last], history[last - j],
+                                                   history[last]))
         if spread > PERIOD_SEPARATION * max(residual, tol):
             return p
         return 0  # a lower period still converging: go on iterating
@@ -292,13 +298,8 @@ def known_attractor(known, key):
     for a in range(known.shape[0]):
         if known[a, KNOWN.outcome] != SEQUENCE_CYCLE:
             continue
-        same = True
-        for i in range(len(key)):
-            state = known[a, KNOWN.key + i]
-            if abs(state - key[i]) > ATTRACTOR_TOL * max(1.0, abs(state)):
-                same = False
-                break
-        if same:
+        state = known[a, KNOWN.key:KNOWN.key + len(key)]
+        if not relative_distance(key, state, state) > ATTRACTOR_TOL:
             return a
     return -1
 
@@ -330,21 +331,13 @@ def captured_by(known, history, count):
             continue
         cycle = known[a, KNOWN.key:KNOWN.key + history.shape[1]]
         x0, x1, x2 = history[last - 2 * p], history[last - p], history[last]
-        d0, d1, d2 = _apart(x0, cycle, cycle), _apart(x1, cycle, cycle), _apart(x2, cycle, cycle)
-        s1, s2 = _apart(x1, x0, cycle), _apart(x2, x1, cycle)
+        d0, d1 = relative_distance(x0, cycle, cycle), relative_distance(x1, cycle, cycle)
+        d2 = relative_distance(x2, cycle, cycle)
+        s1, s2 = relative_distance(x1, x0, cycle), relative_distance(x2, x1, cycle)
         if (d2 <= CAPTURE_DISTANCE and d2 <= CAPTURE_RATIO * d1 and d1 <= CAPTURE_RATIO * d0
                 and s2 <= CAPTURE_RATIO * s1 and d2 <= reach * s2):
             return a
     return -1
-
-
-@njit(**INLINE_OPTIONS)
-def _apart(x, y, scale):
-    """max_i |x_i - y_i| / max(1, |scale_i|)."""
-    apart = 0.0
-    for i in range(x.shape[0]):
-        apart = max(apart, abs(x[i] - y[i]) / max(1.0, abs(scale[i])))
-    return apart
 
 
 @njit(**INLINE_OPTIONS)

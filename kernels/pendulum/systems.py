@@ -15,7 +15,7 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact.impact_map import (ATTRACTOR_TOL, KNOWN, known_attractor,
-                                       make_impact_map, with_cost)
+                                       make_impact_map, relative_distance, with_cost)
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_MAX_STEPS, Settings, add
 from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_RK4, low_order
 from kernels.pendulum import models, tools
@@ -213,10 +213,8 @@ def _same_attractor(seen, a, b, n_keys):
             return False
     if seen[a, KNOWN.outcome] != SEQUENCE_CYCLE:
         return True
-    for i in range(KNOWN.key, KNOWN.key + n_keys):
-        if abs(seen[a, i] - seen[b, i]) > ATTRACTOR_TOL * max(1.0, abs(seen[a, i])):
-            return False
-    return True
+    keys = slice(KNOWN.key, KNOWN.key + n_keys)
+    return not relative_distance(seen[a, keys], seen[b, keys], seen[a, keys]) > ATTRACTOR_TOL
 
 
 PARAMETERS = {"paper": paper_parameters, "rigid": rigid_parameters,

@@ -555,7 +555,7 @@ def lab_window(model, high_order=True):
     speed_bound = model.speed_bound
 
     @njit(**INLINE_OPTIONS)
-    def clear_time(t, y, data, p):
+    def clear_time(y, values_now, data, p):
         """No event within this time (System.clear_time), nor a zero of psi (the coast
         takes the step that holds one as the bound of its time, _swing_coast): each face's
         gap G moves at |G'| = |phi1' + h psi'| <= |phi1'| + max|h| max|psi'|, psi and the
@@ -563,7 +563,7 @@ def lab_window(model, high_order=True):
         monotonic in cos psi, so max|h| is its value at psi = 0 or pi, 1/|1 - k| (1/2 at
         k = 1)."""
         k = data[2]
-        g0, g1, g2 = values(t, y, data)
+        g0, g1, g2 = values_now  # values(t, y, data): the flight has them at hand
         speed = speed_bound(y, p)
         h_max = max(1.0 / (1.0 + k), 1.0 / abs(1.0 - k) if k != 1.0 else 0.5)
         face = min(abs(g0), abs(g1)) / (abs(rotor_speed(y)) + h_max * speed)
