@@ -415,10 +415,7 @@ def settles_nowhere(history, count, settings, repeat_tol):
         mean, largest, smallest = np.zeros(2), np.zeros(2), math.inf
         for half in range(2):
             for j in range(n - (2 - half) * quarter, n - (1 - half) * quarter):
-                step = 0.0
-                for i in range(history.shape[1]):
-                    step = max(step, abs(history[j, i] - history[j - p, i])
-                               / max(1.0, abs(history[j, i])))
+                step = relative_distance(history[j], history[j - p], history[j])
                 mean[half] += step / quarter
                 largest[half] = max(largest[half], step)
                 if half == 1:
