@@ -65,10 +65,16 @@ def timed_run(spec: Path, out: Path) -> dict:
 
 
 def main() -> None:
-    specs = sys.argv[1:] or [str(HERE / "specs" / name) for name in DEFAULT]
+    # a spec file, or the name of one in benchmarks/specs/
+    specs = [Path(name) if Path(name).exists() else HERE / "specs" / name
+             for name in sys.argv[1:] or DEFAULT]
+    missing = [str(spec) for spec in specs if not spec.exists()]
+    if missing:
+        sys.exit(f"bench_atlas: no such spec: {', '.join(missing)} (a file, or a name in "
+                 f"{HERE / 'specs'})")
     results = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for spec in map(Path, specs):
+        for spec in specs:
             small = Path(tmp) / spec.name
             small.write_text(re.sub(r"num = \d+", "num = 2", spec.read_text()))
             timed_run(small, Path(tmp) / "small.nc")  # compiles, or loads the cache
