@@ -31,10 +31,9 @@ HERE = Path(__file__).resolve().parent
 SWEEP = str(Path(sys.executable).with_name("sweep"))
 
 
-def timed_run(spec: Path, cache: Path, out: Path, tree: str | None = None,
-              cpu: bool = False) -> float:
-    """Wall seconds of one ``sweep run`` (``cpu``: its CPU seconds, user and system); with
-    ``tree`` the package imported from that checkout instead of this one."""
+def timed_run(spec: Path, cache: Path, out: Path, tree: str | None = None) -> tuple:
+    """(wall seconds, CPU seconds: user and system) of one ``sweep run``; with ``tree`` the
+    package imported from that checkout instead of this one."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
     if tree:
         env["PYTHONPATH"] = tree
@@ -42,10 +41,9 @@ def timed_run(spec: Path, cache: Path, out: Path, tree: str | None = None,
     started = time.perf_counter()
     subprocess.run([SWEEP, "run", str(spec), "-o", str(out), "-q", "--force"], env=env,
                    check=True, capture_output=True, cwd=tree)
+    wall = time.perf_counter() - started
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if cpu:
-        return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return time.perf_counter() - started
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
 def example_spec(name: str, folder: Path) -> Path:
@@ -71,7 +69,7 @@ def against(names: list[str], tree: str, rounds: int, label: str = "") -> None:
             for r in range(rounds):
                 for i, which in enumerate((here, tree) if r % 2 == 0 else (tree, here)):
                     times[which].append(timed_run(spec, tmp / f"cache{r}{i}", tmp / "a.nc",
-                                                  which, cpu=True))
+                                                  which)[1])
         this, other = statistics.median(times[here]), statistics.median(times[tree])
         result["examples"][name] = {"this_cpu_s": this, "other_cpu_s": other,
                                     "ratio": this / other}
@@ -107,11 +105,9 @@ def main():
             for r in range(args.rounds):
                 cache = tmp / f"cache{r}"
                 for kind, out in (("cold", "a.nc"), ("warm", "b.nc")):
-                    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-                    runs[kind].append(timed_run(spec, cache, tmp / out))
-                    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-                    runs[kind + "_cpu"].append((after.ru_utime - before.ru_utime)
-                                               + (after.ru_stime - before.ru_stime))
+                    wall, cpu = timed_run(spec, cache, tmp / out)
+                    runs[kind].append(wall)
+                    runs[kind + "_cpu"].append(cpu)
         c, w = statistics.median(runs["cold"]), statistics.median(runs["warm"])
         cc, wc = statistics.median(runs["cold_cpu"]), statistics.median(runs["warm_cpu"])
         # on CPU time too: a compile is one thread's work, and a loaded machine's wall
