@@ -3,7 +3,8 @@ x'' = -c x - g between two levels (an oscillator for c = 1, g = 0; free fall for
 g = 1), and y' = y^2, which blows up at t = 1/y0.
 
 Orders of RK4 and DOPRI5 measured by regression, event times against the analytic crossing,
-a grazing contact found with a window of 1/100 of a step, no event at the restart point, the
+a grazing contact found with a window of 1/100 of a step, a return to the level inside the
+first sample interval of a restart at zero speed, no event at the restart point, the
 ballistic first-step cap (H4), Newton polish limited by atol (H5), the direction filter, the
 bracketing root finder's status, the step budget and the step-size underflow."""
 
@@ -208,6 +209,70 @@ def test_grazing_contact_is_found_with_a_window_of_a_hundredth_of_a_step(phase):
                      settings("rk4", dt=dt), False)
     assert fl.outcome == FLIGHT_EVENT and fl.event == UPPER
     assert abs(fl.t - (0.5 * math.pi - delta)) < 0.5 * delta  # on the window's near side
+
+
+@njit(**INLINE_OPTIONS)
+def cubic_rhs(y, p):
+    return y[1], p[0] + p[1] * y[2], 1.0  # x'' = a + b t, with y[2] = t
+
+
+@njit(**INLINE_OPTIONS)
+def cubic_values(t, y, data):
+    return (y[0],)
+
+
+@njit(**INLINE_OPTIONS)
+def cubic_rates(t, y, dy, data):
+    return (dy[0],)
+
+
+@njit(**INLINE_OPTIONS)
+def cubic_start(t, y, f, data, p):
+    return f[0], f[1]
+
+
+@njit(**INLINE_OPTIONS)
+def cubic_monitor(t, y, f):
+    return y[0], f[0], f[1]
+
+
+_cubic_flights = {direction: make_flight(System(
+    cubic_rhs, relative_scales, cubic_values, cubic_rates, (direction,), terminal,
+    cubic_start, cubic_monitor))[0] for direction in (1, -1)}
+_rising_flight, _falling_flight = _cubic_flights[1], _cubic_flights[-1]
+
+
+@njit
+def cubic_flight(rising, p, s):
+    if rising:
+        return _rising_flight(0.0, (0.0, 0.0, 0.0), p, 0.0, s, False)
+    return _falling_flight(0.0, (0.0, 0.0, 0.0), p, 0.0, s, False)
+
+
+@pytest.mark.parametrize("rising", [True, False])
+def test_a_return_to_the_level_inside_the_first_sample_interval_is_found(rising):
+    """x = a t^2/2 + b t^3/6 from rest on the level x = 0 (a restart at zero normal speed:
+    no ballistic cap): it leaves to the near side and is back at t = -3a/b = 0.03, inside
+    the first sample interval of an RK4 step of 0.5 (0.1), where no sample sees it below
+    the level. RK4 and the cubic interpolant are exact on a cubic, so the crossing is
+    found to round-off (the start's sample alone stepped over it, and the flight went on
+    inside the tool)."""
+    sign = 1.0 if rising else -1.0
+    fl = cubic_flight(rising, (-0.01 * sign, sign), settings("rk4", dt=0.5, horizon=2.0))
+    assert fl.outcome == FLIGHT_EVENT and fl.cost.events == 1
+    assert fl.t == pytest.approx(0.03, abs=1e-14)
+
+
+@pytest.mark.parametrize("rising", [True, False])
+@pytest.mark.parametrize("cubic", [0.0, 1.0])
+def test_a_start_pressed_past_the_level_is_no_return_to_it(rising, cubic):
+    """From rest on the level, accelerated to its far side (pressed into the tool), with
+    and without a cubic term: the motion never was on the near side, so there is no
+    crossing (the check for a return does not invent one)."""
+    sign = 1.0 if rising else -1.0
+    fl = cubic_flight(rising, (0.01 * sign, cubic * sign), settings("rk4", dt=0.5,
+                                                                     horizon=2.0))
+    assert fl.outcome == FLIGHT_HORIZON and fl.cost.events == 0
 
 
 def test_no_event_at_the_restart_point():

@@ -18,7 +18,10 @@ end are the events' values and rates at the step's two ends:
 4. Illinois regula falsi on the bracket, which returns whether it converged (where it does
    not, g jumps inside the bracket, and its estimate is still inside it for the polish);
 5. the step's start never counts: a crossing needs g strictly on the far side before it
-   (no event at the restart point, H4);
+   (no event at the restart point, H4); but a flight that starts on the level and is past
+   it again at the first sign sample is checked for a return inside that interval (a
+   restart at zero normal speed leaves the level and may come back before the sample: no
+   ballistic cap bounds it), at the interpolant's turn, on exact partial steps;
 6. a step that starts beyond the level by more than ``slack`` (rounding at a restart is
    far less) has no crossing of it: the flight cannot be inside the tool, and where the
    state grows fast the cubic overshoots and reads as one (a blow-up read as a contact).
@@ -26,6 +29,8 @@ end are the events' values and rates at the step's two ends:
 The flight polishes the located time by Newton on exact partial steps (kernels/impact/
 flight.py): the interpolant is only O(h^4) accurate.
 """
+
+import math
 
 from numba import njit
 
@@ -180,8 +185,35 @@ def make_locator(values, rates, directions, step):
                                                      1e-15 * h)[0]
             if crossed(prev, val, direction):
                 return root_on_interpolant(data, prev_s, s, prev, val, 1e-15 * h)[0]
+            if j == 1 and not ((val < 0.0) if up else (val > 0.0)):
+                # a start on the level, past it again at the first sample: where the flight
+                # left the level (a restart at zero normal speed) and came back within the
+                # first sample interval, the return is a crossing
+                s_back = return_to_level(e, s, val if j == n else math.nan, st, context)
+                if s_back >= 0.0:
+                    return s_back
             prev_s, prev, prev_rate = s, val, rate
         return -1.0
+
+    @njit(**INNER_OPTIONS)
+    def return_to_level(e, s, g_s, st, context):
+        """The return to event e's level inside (0, s] of a flight that starts on it: where
+        g is on the near side (strictly) at the interpolant's turn away from the level in
+        (0, s), on an exact partial step, and on the far side at s (on an exact partial step
+        unless given: g_s), the crossing between them, on exact partial steps; else -1."""
+        h, system = st[1], context[0]
+        direction = directions[e]
+        up = direction > 0
+        data = (e, st, context)
+        at = extremum(e, 0.0, s, not up, st, system)
+        g_at = on_partial_step(at, data)
+        if not ((g_at < 0.0) if up else (g_at > 0.0)):
+            return -1.0
+        if math.isnan(g_s):
+            g_s = on_partial_step(s, data)
+        if not crossed(g_at, g_s, direction):
+            return -1.0
+        return root_on_partial_steps(data, at, s, g_at, g_s, 1e-15 * h)[0]
 
     @njit(**INNER_OPTIONS)
     def locate(st, context, start):
