@@ -99,7 +99,7 @@ def test_dop853_compiled_in_or_not_dopri5_takes_the_same_steps():
 
     def rows(method, high):
         settings = systems.settings_for(row, method, 1e-10, 1e-12, 0.0, 200)
-        return dispatch.solve_system(systems.ENTRY_POINTS[row, False, high, False], stop,
+        return dispatch.solve_system(systems.ENTRY_POINTS[row, False, high, False, False], stop,
                                      settings)
 
     dopri5 = rows(METHOD_DOPRI5, False)
@@ -120,10 +120,11 @@ def test_entry_points_and_dispatch_follow_the_table():
         for method, high in ((METHOD_DOPRI5, False), (METHOD_DOP853, True)):
             for two in (False, True):
                 for tangent in (False, True):
-                    entry = systems.entry_point(row, method, tangent, two)
-                    assert entry.py_func.__name__ == table.entry_name(
-                        row, tangent and row.tangent, high, two)
-                assert ((row, True, high, two) in systems.ENTRY_POINTS) == row.tangent
+                    for starts in (1, 8):
+                        entry = systems.entry_point(row, method, tangent, two, starts)
+                        assert entry.py_func.__name__ == table.entry_name(
+                            row, tangent and row.tangent, high, two, starts > 1)
+                assert ((row, True, high, two, False) in systems.ENTRY_POINTS) == row.tangent
         contact = systems.CONTACTS[row.model, row.tool, False]
         model = getattr(models, row.model.upper())
         assert (contact.pressed is not tools.never) == row.slide

@@ -466,15 +466,17 @@ def with_cost(s, impacts, cost):
     return of_cycle(s.period, s, impacts, cost)
 
 
-def make_impact_map(c, jump_early, stability=False):
+def make_impact_map(c, jump_early, stability=False, known_cycles=True):
     """The driver of a Contact (see the module docstring); with ``stability`` the steady
-    cycle also carries the tangent of the section map (tangent.py) for its multipliers."""
+    cycle also carries the tangent of the section map (tangent.py) for its multipliers;
+    without ``known_cycles`` a sequence never looks for the cycles of other starts (a
+    single start: their search is not compiled in)."""
     tracker = make_tracker(c, 2 if c.model.driven else 4) if stability else NO_TRACKER
     restitute = make_restitute(c)
     contact = make_contact(c, restitute)
     section = make_section(c, contact, tracker)
     cycle = make_cycle(c, section, tracker)
-    transient = make_transient(c, jump_early, section)
+    transient = make_transient(c, jump_early, section, known_cycles)
     steady, settle = make_steady(c, jump_early, transient, cycle)
     return Driver(steady=steady, settle=settle, section=section, contact=contact,
                   restitute=restitute)
@@ -722,10 +724,11 @@ def make_record(c):
     return record
 
 
-def make_transient(c, jump_early, section):
+def make_transient(c, jump_early, section, known_cycles=True):
     """The transient of a Contact: ``transient(p, data, r, settings, repeat_tol, log, t, y,
     history, known) -> Transient``, sections from (t, y) until p of them repeat
-    (``history`` holds their states), one is on a cycle of ``known`` (known_attractor),
+    (``history`` holds their states), one is on a cycle of ``known`` (known_attractor,
+    captured_by; with ``known_cycles`` only),
     or the sequence settles nowhere (settles_nowhere); accelerated where the map allows
     it: on an affine map (``jump_early``) by Aitken's jump from the start and two
     sections (aitken_jump), on another smooth map with a 2-D section by fixed-point jumps
@@ -748,11 +751,13 @@ def make_transient(c, jump_early, section):
         while count <= settings.max_impacts:
             key = record(t, y, data, p, history, count, log)
             count += 1
-            hit = known_attractor(known, key)
-            if hit < 0:  # captured on its way: the cycle's own state stands for it
-                hit = captured_by(known, history, count)
-                if hit >= 0:
-                    key = from_row(key, known[hit], int(KNOWN.key))
+            hit = -1
+            if known_cycles:  # its own test, so that numba prunes it for a single start
+                hit = known_attractor(known, key)
+                if hit < 0:  # captured on its way: the cycle's own state stands for it
+                    hit = captured_by(known, history, count)
+                    if hit >= 0:
+                        key = from_row(key, known[hit], int(KNOWN.key))
             period = classify_period(history, count, repeat_tol, MAX_PERIOD)
             # on a cycle found before: that attractor (its values are known); or, away from
             # the accelerators' jumps, a sequence as not periodic as its budget would find it
@@ -768,13 +773,14 @@ def make_transient(c, jump_early, section):
             # an affine map of slope r = 0 is constant: its first section is the cycle
             constant = jump_early and r == 0.0
             refine = bool(constant)  # bool(): see kernels/__init__.py
-            if a.secant and count == a.jumped_at + 1:
-                a, t, y = broyden(a, history, count, t, y, data, p, repeat_tol)
-                if a.converged:
-                    period = 1
-                    break
-            elif smooth_2d and count - a.jumped_at >= 3:
-                a, t, y = fixed_point(a, history, count, t, y, data, p)
+            if smooth:  # its own test, so that numba prunes the jumps of a map without them
+                if a.secant and count == a.jumped_at + 1:
+                    a, t, y = broyden(a, history, count, t, y, data, p, repeat_tol)
+                    if a.converged:
+                        period = 1
+                        break
+                elif smooth_2d and count - a.jumped_at >= 3:
+                    a, t, y = fixed_point(a, history, count, t, y, data, p)
             if jump_early and count == 3:  # the next section, refined, is to confirm it
                 t, y = land(aitken_jump(history, 2), t, y, data, p, history, count - 1)
                 refine = jumped = True
@@ -831,10 +837,11 @@ def make_steady(c, jump_early, transient, cycle):
         count, period, a, cost = tr.count, tr.period, tr.acceleration, tr.cost
         t, y, data = tr.t, tr.y, tr.data
         impacts = count - 2 * period
-        if a.first_jump > 0 and period == 1:  # the impacts from rest, not the sections flown
-            impacts = impacts_past_jump(a.jac, a.first_jump - 1, a.x_rest,
-                                        (history[count - 1, 0], history[count - 1, 1]),
-                                        repeat_tol, IMPACTS_COUNTED)
+        if smooth:  # (a map without jumps: pruned, as in the transient)
+            if a.first_jump > 0 and period == 1:  # the impacts from rest, not the sections
+                impacts = impacts_past_jump(a.jac, a.first_jump - 1, a.x_rest,
+                                            (history[count - 1, 0], history[count - 1, 1]),
+                                            repeat_tol, IMPACTS_COUNTED)
         if period == 0:
             return no_cycle(not_periodic(history, count), False, settings.max_impacts, cost,
                             key_of(t, y, data, p)), t, y, data
@@ -847,10 +854,11 @@ def make_steady(c, jump_early, transient, cycle):
         for i in range(history.shape[1]):
             last_step = max(last_step, abs(history[count - 1, i] - history[count - 2, i]))
         t_run, y_run = t, y
-        extrapolated = (period == 1 and count >= 3 and not jump_early and smooth
-                        and not a.converged)
-        if extrapolated:
-            t_run, y_run = from_key(aitken_jump(history, count - 1), t, y, data, p)
+        extrapolated = False
+        if smooth:
+            extrapolated = period == 1 and count >= 3 and not jump_early and not a.converged
+            if extrapolated:
+                t_run, y_run = from_key(aitken_jump(history, count - 1), t, y, data, p)
         result = cycle(t_run, y_run, data, p, r, settings, period)
         cost = add(cost, result.cost)
         if extrapolated and result.residual > last_step:

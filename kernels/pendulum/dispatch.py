@@ -52,7 +52,7 @@ def _integrated(system, cases, method, stability, starts):
     from kernels.pendulum.systems import section_repeat_tol
 
     def solve(sub, method_code, rtol, atol, dt, finer_by=0.0):
-        entry = systems.entry_point(system, method_code, stability, finer_by > 0.0)
+        entry = systems.entry_point(system, method_code, stability, finer_by > 0.0, starts)
         return solve_system(entry, sub, systems.settings_for(
             system, method_code, rtol, atol, dt, method.max_impacts, starts, finer_by),
             first_stage=finer_by > 0.0)

@@ -65,7 +65,7 @@ MAX_KEY = 3
 
 
 def make_block(contact, jump_early, parameters, data_of, frequency, stability=False,
-               high_order=True, two_stage=True):
+               high_order=True, two_stage=True, several_starts=True):
     """The block function of a system, ``block(cases, settings, rows, first_rows, log)``:
     each case's steady state into its row (ROW), and into ``log`` the section impacts
     (rotor angle mod 2 pi, psi) of the last case. ``frequency``: whether flights end where
@@ -80,8 +80,10 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     (runge_kutta.low_order), its step-size control included. Without ``two_stage`` the
     second stage is not compiled in, and every solve is the first stage's whatever
     settings.finer_by: the solves that never take it (exact flights, a forced method) do
-    not pay for its compile."""
-    driver = make_impact_map(contact, jump_early, stability)
+    not pay for its compile. Without ``several_starts`` each case runs from rest only,
+    whatever settings.starts, and the search for other starts' cycles is not compiled
+    in."""
+    driver = make_impact_map(contact, jump_early, stability, several_starts)
     steady, settle = driver.steady, driver.settle
 
     @njit(**INNER_OPTIONS)
@@ -97,8 +99,9 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
         cycle = first.outcome == SEQUENCE_CYCLE
         if settings.finer_by <= 1.0 or not (cycle or first.outcome == SEQUENCE_MAX_STEPS):
             return first, first
-        if cycle and known_attractor(known, first.key) >= 0:
-            return first, first  # on a cycle another start found: its second stage ran
+        if several_starts:  # (pruned for a single start: no other start's cycles)
+            if cycle and known_attractor(known, first.key) >= 0:
+                return first, first  # on a cycle another start found: its second stage ran
         cost = first.cost
         if cycle:
             then = settle(p, d, r, finer, tols[1], scratch, t, y, known)[0]
@@ -131,28 +134,29 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
             s, first = solve_start(p, data, r, settings, finer, tols, log, int(0), seen[:0],
                                    scratch)
             cost = s.cost
-            if starts > 1:
-                n_keys = len(s.key)
-                remember(seen, int(0), s)
-                distinct, same = int(1), int(1)
-                for j in range(1, starts):
-                    # a start stops on a cycle another start found: the same attractor
-                    other = solve_start(p, data, r, settings, finer, tols, log, j,
-                                        seen[:distinct], scratch)[0]
-                    cost = add(cost, other.cost)
-                    remember(seen, distinct, other)
-                    if _same_attractor(seen, int(0), distinct, n_keys):
-                        same += 1
-                    new = True
-                    for i in range(distinct):
-                        if _same_attractor(seen, i, distinct, n_keys):
-                            new = False
-                            break
-                    if new:
-                        distinct += 1
-                attractors, basin = float(distinct), same / starts
-            else:
-                attractors, basin = 1.0, 1.0
+            attractors, basin = 1.0, 1.0
+            # its own test, so that numba prunes the other starts for a single one
+            if several_starts:
+                if starts > 1:
+                    n_keys = len(s.key)
+                    remember(seen, int(0), s)
+                    distinct, same = int(1), int(1)
+                    for j in range(1, starts):
+                        # a start stops on a cycle another start found: the same attractor
+                        other = solve_start(p, data, r, settings, finer, tols, log, j,
+                                            seen[:distinct], scratch)[0]
+                        cost = add(cost, other.cost)
+                        remember(seen, distinct, other)
+                        if _same_attractor(seen, int(0), distinct, n_keys):
+                            same += 1
+                        new = True
+                        for i in range(distinct):
+                            if _same_attractor(seen, i, distinct, n_keys):
+                                new = False
+                                break
+                        if new:
+                            distinct += 1
+                    attractors, basin = float(distinct), same / starts
             write_row(row, s, cost, attractors, basin, frequency)
             write_row(first_rows[c], first, first.cost, attractors, basin, frequency)
 
@@ -233,15 +237,16 @@ VERDICT_FROM = 64
 
 
 def build_block(system, contact, parameters, data_of, stability=False, returning=None,
-                high_order=True, two_stage=True):
+                high_order=True, two_stage=True, several_starts=True):
     """The block function of a table row (kernels/pendulum/table.py) from its contact,
     its parameters and system data of a case; ``returning``: whether its flights end
     where they started (default: its tool is one of table.RETURNING_TOOLS);
     ``high_order``: whether the contact's flights have DOP853; ``two_stage``: whether
-    auto's second stage is compiled in (make_block)."""
+    auto's second stage is compiled in; ``several_starts``: whether a case may run from
+    several starts (make_block)."""
     returning = system.tool in RETURNING_TOOLS if returning is None else returning
     return make_block(contact, system.affine, parameters, data_of, returning, stability,
-                      high_order, two_stage)
+                      high_order, two_stage, several_starts)
 
 
 #: a module-level entry point: numba caches a function on disk by its name and source
@@ -259,10 +264,11 @@ def _entry_point(name: str, block):
 
 
 #: the entry points of each system (a table row) by (system, tangent, high_order,
-#: two_stage): with the tangent where its multipliers need it (elsewhere they are known in
-#: closed form), with DOP853 compiled in (its code made the first run of every example
-#: 1.02-1.06x longer), and with auto's second stage (about a tenth of the blade example's
-#: first run, whose exact flights never take it)
+#: two_stage, several_starts): with the tangent where its multipliers need it (elsewhere
+#: they are known in closed form), with DOP853 compiled in (its code made the first run of
+#: every example 1.02-1.06x longer), with auto's second stage (about a tenth of the blade
+#: example's first run, whose exact flights never take it), and with several starts (the
+#: search for other starts' cycles is compiled only where a sweep asks for attractors)
 ENTRY_POINTS = {}
 for _system in SYSTEMS:
     for _high in (False, True):
@@ -270,17 +276,20 @@ for _system in SYSTEMS:
                  PARAMETERS[_system.model], DATA[_system.tool])
         for _tangent in (False, True) if _system.tangent else (False,):
             for _two in (False, True):
-                ENTRY_POINTS[_system, _tangent, _high, _two] = _entry_point(
-                    entry_name(_system, _tangent, _high, _two),
-                    build_block(*_args, stability=_tangent, high_order=_high, two_stage=_two))
+                for _several in (False, True):
+                    ENTRY_POINTS[_system, _tangent, _high, _two, _several] = _entry_point(
+                        entry_name(_system, _tangent, _high, _two, _several),
+                        build_block(*_args, stability=_tangent, high_order=_high,
+                                    two_stage=_two, several_starts=_several))
 
 
-def entry_point(system, method, tangent=False, two_stage=False):
+def entry_point(system, method, tangent=False, two_stage=False, starts=1):
     """The entry point that solves a system (a table row) by ``method`` (a core method
     code), with the tangent for the multipliers where asked for and the system needs it,
-    and with auto's second stage where asked for (settings.finer_by)."""
+    with auto's second stage where asked for (settings.finer_by), and for ``starts``
+    starting states per case (settings.starts)."""
     return ENTRY_POINTS[system, tangent and system.tangent, method == METHOD_DOP853,
-                        bool(two_stage)]
+                        bool(two_stage), starts > 1]
 
 
 def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1, finer_by=0.0):

@@ -49,12 +49,13 @@ BY_CODES = {(MODELS[s.model], TOOLS[s.tool]): s for s in SYSTEMS}
 
 
 def entry_name(system: PendulumSystem, tangent: bool = False, high_order: bool = False,
-               two_stage: bool = False) -> str:
+               two_stage: bool = False, several_starts: bool = False) -> str:
     """The name of a system's compiled entry point:
-    ``<model>_on_<tool>[_tangent][_dop853][_two_stage]`` (with the tangent; with DOP853
-    compiled in; with auto's second stage)."""
+    ``<model>_on_<tool>[_tangent][_dop853][_two_stage][_starts]`` (with the tangent; with
+    DOP853 compiled in; with auto's second stage; for several starts per case)."""
     return (f"{system.model}_on_{system.tool}" + ("_tangent" if tangent else "")
-            + ("_dop853" if high_order else "") + ("_two_stage" if two_stage else ""))
+            + ("_dop853" if high_order else "") + ("_two_stage" if two_stage else "")
+            + ("_starts" if several_starts else ""))
 
 
 def with_closed_form(given_models, given_tools) -> bool:
