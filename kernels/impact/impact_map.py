@@ -466,18 +466,19 @@ def with_cost(s, impacts, cost):
     return of_cycle(s.period, s, impacts, cost)
 
 
-def make_impact_map(c, jump_early, stability=False, known_cycles=True):
+def make_impact_map(c, jump_early, stability=False, known_cycles=True, second_stage=True):
     """The driver of a Contact (see the module docstring); with ``stability`` the steady
     cycle also carries the tangent of the section map (tangent.py) for its multipliers;
     without ``known_cycles`` a sequence never looks for the cycles of other starts (a
-    single start: their search is not compiled in)."""
+    single start: their search is not compiled in); without ``second_stage`` the sequence
+    from a state (``settle``) is called only by ``steady`` and inlined into it."""
     tracker = make_tracker(c, 2 if c.model.driven else 4) if stability else NO_TRACKER
     restitute = make_restitute(c)
     contact = make_contact(c, restitute)
     section = make_section(c, contact, tracker)
     cycle = make_cycle(c, section, tracker)
     transient = make_transient(c, jump_early, section, known_cycles)
-    steady, settle = make_steady(c, jump_early, transient, cycle)
+    steady, settle = make_steady(c, jump_early, transient, cycle, second_stage)
     return Driver(steady=steady, settle=settle, section=section, contact=contact,
                   restitute=restitute)
 
@@ -814,14 +815,16 @@ def make_transient(c, jump_early, section, known_cycles=True):
     return transient
 
 
-def make_steady(c, jump_early, transient, cycle):
+def make_steady(c, jump_early, transient, cycle, second_stage=True):
     """The whole sequence of a Contact: ``steady(p, data, r, settings, repeat_tol, log,
     start, known) -> (Steady, t, y, data)`` from a starting state (see the module
     docstring), and ``settle(p, data, r, settings, repeat_tol, log, t, y, known)`` the
     same from the state (t, y, data); each also returns the state its cycle ran from."""
     first, key_of, from_key, smooth = c.first, c.key, c.from_key, c.smooth
 
-    @njit(**INNER_OPTIONS)
+    # one caller (steady) where no second stage goes on from a state: inlined into it, one
+    # function fewer to compile
+    @njit(**(INNER_OPTIONS if second_stage else INLINE_OPTIONS))
     def settle(p, data, r, settings, repeat_tol, log, t, y, known):
         """The sequence from (t, y, data) to its steady cycle, within settings.max_impacts,
         its cycle's section states repeating to ``repeat_tol``; log[j] gets (rotor angle

@@ -83,10 +83,11 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     not pay for its compile. Without ``several_starts`` each case runs from rest only,
     whatever settings.starts, and the search for other starts' cycles is not compiled
     in."""
-    driver = make_impact_map(contact, jump_early, stability, several_starts)
+    driver = make_impact_map(contact, jump_early, stability, several_starts, two_stage)
     steady, settle = driver.steady, driver.settle
 
-    @njit(**INNER_OPTIONS)
+    # one stage: a call of steady, inlined (one function fewer to compile)
+    @njit(**(INNER_OPTIONS if two_stage else INLINE_OPTIONS))
     def solve_start(p, data, r, settings, finer, tols, log, start, known, scratch):
         """(the Steady of a start, that of its first stage) (see block); ``scratch``: a
         one-row log for the second stage, whose sections stay out of ``log``. A regime
