@@ -15,8 +15,9 @@ import pytest
 from numba import njit
 
 from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings
-from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5
+from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5, METHOD_EXACT
 from kernels.pendulum import dispatch, models, systems, table, tools
+from kernels.pendulum.accuracy import exact_settings
 from kernels.pendulum.cases import CASE_COLUMNS, N_ROW, ROW, C
 from kernels.rotary_pendulum import DECLARATION
 from tests.stop_tool import mirrored_stop
@@ -110,6 +111,37 @@ def test_dop853_compiled_in_or_not_dopri5_takes_the_same_steps():
     stepped = dopri5[:, ROW.steps] > 0  # an escape decided before a flight takes none
     assert stepped.sum() >= n // 2
     assert np.all(dop853[stepped, ROW.steps] < dopri5[stepped, ROW.steps] / 2)
+
+
+@pytest.mark.parametrize("model, tool", [("rotor", "rotor_stop"), ("rigid", "lab_window")])
+def test_the_leanest_entry_point_gives_the_bits_of_the_fullest_at_one_start(model, tool):
+    """An entry point without the search for other starts' cycles and without auto's second
+    stage (so with the one-stage calls inlined) gives, at one start and no second stage
+    asked for, every bit of the one with both compiled in: on the rotor stop (a smooth map:
+    its jumps and Broyden's steps) and on the blade by the exact flights. What the lean
+    entry points leave out is only what these solves never run."""
+    rng = np.random.default_rng(48)
+    n = 16
+    k = rng.uniform(0.9, 2.5, n)
+    values = dict(model=table.MODELS[model], k=k, xi=4.0,
+                  kappa=(1 + k) ** 2 / (4 * k) * rng.uniform(1.1, 1.5, n),
+                  R=np.where(rng.random(n) < 0.3, 0.0, rng.uniform(0.0, 0.02, n)),
+                  tool=table.TOOLS[tool], tool_window=rng.uniform(0.1, 0.5, n),
+                  rotor_inertia_ratio=rng.uniform(20.0, 200.0, n),
+                  motor_slope=rng.uniform(5.0, 100.0, n), idle_speed=1.0)
+    cases = np.ascontiguousarray(np.stack([np.broadcast_to(values[c], n)
+                                           for c in CASE_COLUMNS], axis=1))
+    row = table.BY_CODES[table.MODELS[model], table.TOOLS[tool]]
+    method = METHOD_EXACT if tool == "lab_window" else METHOD_DOPRI5
+    rtol, atol, dt = exact_settings(1e-6) if method == METHOD_EXACT else (1e-9, 1e-9, 0.0)
+    settings = systems.settings_for(row, method, rtol, atol, dt, 200)
+    lean = dispatch.solve_system(systems.entry_point(row, method), cases, settings)
+    full = dispatch.solve_system(systems.ENTRY_POINTS[row, False, False, True, True], cases,
+                                 settings)
+    assert systems.entry_point(row, method) is systems.ENTRY_POINTS[row, False, False, False,
+                                                                    False]
+    assert (lean[:, ROW.outcome] == SEQUENCE_CYCLE).sum() >= n // 4
+    np.testing.assert_array_equal(lean, full)
 
 
 def test_entry_points_and_dispatch_follow_the_table():
