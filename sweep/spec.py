@@ -441,7 +441,10 @@ def _axis_values(name: str, entry: Any, p: Quantity) -> tuple[np.ndarray, list]:
             raise UserError(f"{where}: repeated values")
         if p.choices is not None:
             return np.array([str(v) for v in entry], dtype=object), list(entry)
-        return np.array([float(v) for v in entry]), [float(v) for v in entry]
+        # an axis increases whatever the list's order: a chart's cells and a refined
+        # boundary lie between neighbouring values
+        numbers = sorted(float(v) for v in entry)
+        return np.array(numbers), numbers
     raise UserError(f"{where}: must be a table {{start, stop, num[, scale]}} or a list "
                     "of values")
 

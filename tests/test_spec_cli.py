@@ -108,6 +108,30 @@ def test_existing_atlas_is_not_overwritten_without_force(tmp_path, capsys):
     assert e.value.code == 0
 
 
+def test_a_grid_list_in_any_order_is_an_increasing_axis(tmp_path):
+    """A chart's cells (pcolormesh, shading "nearest") and a refined boundary lie between
+    neighbouring grid values: a list given in any order becomes an increasing axis of the
+    atlas, and its chart is drawn without matplotlib's warning that the cell centres are
+    not monotonic (its cells were drawn out of place)."""
+    import warnings
+
+    import xarray as xr
+
+    spec = tmp_path / "s.toml"
+    spec.write_text('mechanism = "crank_rocker"\n[grid]\nR = [0.3, 0.1, 0.2]\n'
+                    'largest_link = [3.0, 2.5, 2.8]\n[chart]\nx = "R"\ny = "largest_link"\n'
+                    'color = "impact_speed"\n')
+    atlas = tmp_path / "s.nc"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(SystemExit) as e:
+            main(["run", str(spec), "-o", str(atlas), "-q"])
+    assert e.value.code == 0 and atlas.with_suffix(".png").exists()
+    with xr.open_dataset(atlas) as ds:
+        assert list(ds["R"].values) == [0.1, 0.2, 0.3]
+        assert list(ds["largest_link"].values) == [2.5, 2.8, 3.0]
+
+
 @pytest.mark.slow
 def test_console_entry_points_run_the_default_sweep(tmp_path):
     """As a user would: python -m sweep run (the built-in default) writes atlas + chart."""
