@@ -226,19 +226,9 @@ def cubic_rates(t, y, dy, data):
     return (dy[0],)
 
 
-@njit(**INLINE_OPTIONS)
-def cubic_start(t, y, f, data, p):
-    return f[0], f[1]
-
-
-@njit(**INLINE_OPTIONS)
-def cubic_monitor(t, y, f):
-    return y[0], f[0], f[1]
-
-
 _cubic_flights = {direction: make_flight(System(
     cubic_rhs, relative_scales, cubic_values, cubic_rates, (direction,), terminal,
-    cubic_start, cubic_monitor))[0] for direction in (1, -1)}
+    line_start, line_monitor))[0] for direction in (1, -1)}  # x is the line's coordinate
 _rising_flight, _falling_flight = _cubic_flights[1], _cubic_flights[-1]
 
 

@@ -30,8 +30,6 @@ The flight polishes the located time by Newton on exact partial steps (kernels/i
 flight.py): the interpolant is only O(h^4) accurate.
 """
 
-import math
-
 from numba import njit
 
 from kernels import INNER_OPTIONS, INLINE_OPTIONS
@@ -189,18 +187,18 @@ def make_locator(values, rates, directions, step):
                 # a start on the level, past it again at the first sample: where the flight
                 # left the level (a restart at zero normal speed) and came back within the
                 # first sample interval, the return is a crossing
-                s_back = return_to_level(e, s, val if j == n else math.nan, st, context)
+                s_back = return_to_level(e, s, st, context)
                 if s_back >= 0.0:
                     return s_back
             prev_s, prev, prev_rate = s, val, rate
         return -1.0
 
     @njit(**INNER_OPTIONS)
-    def return_to_level(e, s, g_s, st, context):
+    def return_to_level(e, s, st, context):
         """The return to event e's level inside (0, s] of a flight that starts on it: where
         g is on the near side (strictly) at the interpolant's turn away from the level in
-        (0, s), on an exact partial step, and on the far side at s (on an exact partial step
-        unless given: g_s), the crossing between them, on exact partial steps; else -1."""
+        (0, s) and on the far side at s, each on an exact partial step, the crossing between
+        them, on exact partial steps; else -1."""
         h, system = st[1], context[0]
         direction = directions[e]
         up = direction > 0
@@ -209,8 +207,7 @@ def make_locator(values, rates, directions, step):
         g_at = on_partial_step(at, data)
         if not ((g_at < 0.0) if up else (g_at > 0.0)):
             return -1.0
-        if math.isnan(g_s):
-            g_s = on_partial_step(s, data)
+        g_s = on_partial_step(s, data)
         if not crossed(g_at, g_s, direction):
             return -1.0
         return root_on_partial_steps(data, at, s, g_at, g_s, 1e-15 * h)[0]
