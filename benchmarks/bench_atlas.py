@@ -58,10 +58,30 @@ def timed_run(spec: Path, out: Path) -> dict:
 
     with netCDF4.Dataset(out) as nc:
         points = int(nc["status"].size)
+        shares = steps_by_status(nc)
     return {"points": points, "wall_s": round(wall, 2), "cpu_s": round(cpu, 2),
             "compute_s": round(spans["compute_s"], 2), "block_s": round(spans["block_s"], 2),
             "outside_kernels": round(1.0 - spans["compute_s"] / wall, 3),
-            "points_per_cpu_s": round(points / cpu, 1)}
+            "points_per_cpu_s": round(points / cpu, 1)} | shares
+
+
+def steps_by_status(nc) -> dict:
+    """Where an atlas's integration steps went: per status, its share of the designs and
+    of the steps (n_steps), and its median steps per design; {} without n_steps."""
+    import numpy as np
+
+    if "n_steps" not in nc.variables:
+        return {}
+    status = np.asarray(nc["status"][:]).ravel()
+    steps = np.asarray(nc["n_steps"][:], dtype=float).ravel()
+    names = dict(zip(np.asarray(nc["status"].flag_values).tolist(),
+                     nc["status"].flag_meanings.split()))
+    total = steps.sum()
+    return {"steps": total, "by_status": {
+        names[int(code)]: {"designs": round(float((status == code).mean()), 4),
+                           "steps": round(float(steps[status == code].sum() / total), 4),
+                           "median_steps": float(np.median(steps[status == code]))}
+        for code in np.unique(status)}}
 
 
 def main() -> None:

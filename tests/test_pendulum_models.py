@@ -901,16 +901,22 @@ def test_rotor_on_the_blade_chatters_like_the_rigid_model_in_the_limit():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("model", ["paper", "rigid"])
-def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(model):
+@pytest.mark.parametrize("model, closed_form", [("paper", False), ("rigid", False),
+                                                ("rigid", True)])
+def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(model,
+                                                                              closed_form):
     """The coast of a driven pendulum's free flight past the lab blade (tools._swing_coast)
-    skips whole swings in closed form. At 60 random designs and swings (k, xi or kappa,
-    the blade's reach, the swing's amplitude above it, where the faces stand), from just
-    after a passage of psi = 0: SciPy's DOP853 (rtol 1e-12) over the skipped time returns
-    to the same state (whole swings: tau1 from the model's closed form), meets no face
-    with |psi| <= window there (no contact skipped), and the faces the coast says were
-    passed are those around the striker at the end. Coasting must also happen (in more
-    than a quarter of the draws), and never inside the reach (amplitude <= window)."""
+    skips half swings in closed form. At 60 random designs and swings (k, xi or kappa,
+    the blade's reach, the swing's amplitude above it, where the faces stand), from
+    anywhere in the half swing after a passage of psi = 0: SciPy's DOP853 (rtol 1e-12)
+    over the skipped time ends in the state the coast gives (the same state after whole
+    swings, negated after an odd number of half swings: tau1 from the model's closed
+    form; the rigid pendulum's closed-form flight goes on by its exact flow up to the
+    next spell that could meet a face), meets no face with |psi| <= window there (no
+    contact skipped), and the faces the coast says were passed are those around the
+    striker at the end; the last passage it gives is within 1e-9 of SciPy's. Coasting must
+    also happen (in more than a quarter of the draws, odd and even), and never inside the
+    reach (amplitude <= window)."""
     from numba import njit
 
     from kernels.pendulum import models as pm
@@ -921,10 +927,17 @@ def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(mo
 
     @njit
     def call(t_cross, t, y, f, data, p, time_left):
-        return coast(t_cross, 2, 0.1, t, y, f, data, p, time_left, (np.nan, np.nan))
+        return coast(t_cross, 2, 0.1, t, y, f, data, p, time_left, (np.nan, np.nan),
+                     closed_form)
 
-    rng = np.random.default_rng(5 if model == "paper" else 6)
-    coasted = passed = 0
+    swing = m.swing
+
+    @njit
+    def half_swing(y, p, window):  # tau1
+        return swing(y, p, window)[0]
+
+    rng = np.random.default_rng(5 if model == "paper" else 6)  # the same draws either way
+    coasted = passed = odd = 0
     for j in range(60):
         k, c = rng.uniform(0.4, 3.0), rng.uniform(0.5, 5.0)
         p = (k, c)
@@ -941,7 +954,10 @@ def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(mo
                 4.0 * k * math.sin(0.5 * amp) ** 2, (1.0 + k) ** 2, c)))
         else:
             v = 2.0 * math.sqrt(k * c) * math.sin(0.5 * amp)
-        t_cross, lag = rng.uniform(0.0, 2.0 * math.pi), rng.uniform(0.001, 0.2)
+        t_cross = rng.uniform(0.0, 2.0 * math.pi)
+        # from just after the passage, or anywhere in the half swing after it
+        lag = rng.uniform(0.001, 0.2) if j % 2 == 0 else rng.uniform(0.001, 0.95) * (
+            half_swing((0.0, v), p, window))
         z = solve_ivp(rhs, (0.0, lag), [0.0, v], method="DOP853", rtol=1e-13,
                       atol=1e-14).y[:, -1]
         t = t_cross + lag
@@ -951,27 +967,38 @@ def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(mo
         face = g + 1e-3 if j % 3 == 0 else rng.uniform(0.0, 2.0 * math.pi)
         lower = face + 2.0 * math.pi * math.floor((g - face) / (2.0 * math.pi))
         data = (lower, window, k, 0.0, 1.0)
-        skip, new, _ = call(t_cross, t, (z[0], z[1]), tuple(rhs(t, z)), data, p,
-                            200.0 * math.pi)
+        skip, last, y_end, f_end, new, _, exact_steps = call(
+            t_cross, t, (z[0], z[1]), tuple(rhs(t, z)), data, p, 200.0 * math.pi)
         if amp <= window:
             assert skip == 0.0
             continue
         if skip == 0.0:
-            assert new == data
+            assert new == data and y_end == (z[0], z[1]) and last == t_cross
             continue
         coasted += 1
+        tau1 = half_swing((0.0, v), p, window)
+        halves = math.floor(skip / tau1 + 1e-9)
+        odd += halves % 2
+        if not closed_form:  # whole half swings: the state negated or not, exactly
+            assert halves >= 1 and abs(skip - halves * tau1) <= 1e-12 * skip
+            assert np.array_equal(y_end, z * (-1.0) ** halves) and exact_steps == 0
+        else:  # the rest by exact steps, each within the exact flow's reach
+            assert exact_steps >= 1
+        assert np.allclose(f_end, rhs(t + skip, y_end), rtol=0.0, atol=1e-12)
+        assert abs(last - (t_cross + halves * tau1)) <= 1e-9 * max(1.0, skip) or (
+            closed_form and abs(last - (t_cross + (halves + 1) * tau1)) <= 1e-9 * skip)
 
         def faces(s, w):
             return math.sin(0.5 * (s + twin_beta(w[0], k) - face))
         sol = solve_ivp(rhs, (t, t + skip), z, method="DOP853", rtol=1e-12, atol=1e-13,
                         events=faces)
-        assert np.allclose(sol.y[:, -1], z, rtol=0.0, atol=1e-7), (k, c, window, amp)
+        assert np.allclose(sol.y[:, -1], y_end, rtol=0.0, atol=1e-7), (k, c, window, amp)
         met = sol.y_events[0].reshape(-1, 2)
         assert np.all(np.abs(met[:, 0]) > window), (k, c, window, amp)
         passed += len(met)
-        g_end = t + skip + twin_beta(z[0], k)
+        g_end = t + skip + twin_beta(y_end[0], k)
         assert new[0] <= g_end < new[0] + 2.0 * math.pi and new[1:3] == (window, k)
-    assert coasted > 15 and passed > 50
+    assert coasted > 15 and passed > 50 and 0 < odd < coasted
 
 
 def test_dop853_matches_the_closed_form_on_the_stop_and_dopri5_on_the_blade():

@@ -23,9 +23,10 @@ The contract:
    another (a pass by the tool) updates the system data and the flight goes on.
 6. ``monitor(t, y, f) -> (angle, rate, acceleration)``: the quantity whose amplitude and
    peak acceleration a flight reports (turning points and peaks polished with ``refine``).
-   Where the free motion is periodic, the system's ``coast`` may skip whole periods that
-   no event can end, from the second zero crossing of the monitored angle on (the
-   amplitude and peak are then those of one whole swing already flown).
+   Where the free motion is periodic, the system's ``coast`` may skip time that no event
+   can end (half periods, and where the flight is the exact flow's, the rest by it), from
+   the second zero crossing of the monitored angle on (the amplitude and peak are then
+   those of one whole swing already flown).
 7. A flight ends in one of outcomes.FLIGHT_*, with its cost as a Counters record
    (accepted and rejected steps, events). A step whose error estimate is not finite is
    rejected; an RK4 step (no estimate) into a state that is not finite ends the flight.
@@ -46,19 +47,21 @@ from kernels import INLINE_OPTIONS
 
 
 @njit(**INLINE_OPTIONS)
-def no_coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo):
-    return 0.0, data, memo
+def no_coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo, closed_form):
+    return 0.0, t_cross, y, f, data, memo, 0
 
 
 #: what flies: the vector field, error scales, events (values, rates, directions, what each
 #: does), the start gap for the first-step cap, the monitored quantity, and where the free
-#: motion is periodic between events, a coast past whole periods that no event can end
-#: (``coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo) -> (skip, data,
-#: memo)``, called after a step in which the monitored angle crossed zero, the crossing's
-#: time estimated as t_cross, the crossings counted from the flight's start; skip: the time
-#: added to t, a whole number of periods, after which y and f are the same; memo: two
-#: floats the coast keeps between calls of one flight, NaN at its start); where the flow
-#: is known in closed form, ``exact(y, h, p)`` and ``exact_length(y, p, length)``, its step
+#: motion is periodic between events, a coast past the time that no event can end
+#: (``coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo, closed_form) ->
+#: (skip, t_cross, y, f, data, memo, steps)``, called after every step from the monitored
+#: angle's second zero crossing on, the last crossing's time estimated as t_cross within
+#: the step h that held it, the crossings counted from the flight's start; skip: the time
+#: added to t, and t_cross, y and f at its end; memo: two floats the coast keeps between
+#: calls of one flight, NaN at its start; closed_form: whether the flight is the exact
+#: flow's; steps: the exact steps it took, counted with the flight's); where the flow is
+#: known in closed form, ``exact(y, h, p)`` and ``exact_length(y, p, length)``, its step
 #: for runge_kutta.METHOD_EXACT; ``high_order``: whether DOP853 is compiled into its flights
 #: (runge_kutta.make_stepper; a pendulum block made without it solves by DOPRI5 where DOP853
 #: is asked for, systems.make_block); ``clear_time(y, values_now, data, p)``: a time within

@@ -93,7 +93,9 @@ def make_flight(system):
         # (from the step's start) around its largest sample, interior or at the end
         best, best_value = (y, f, y, f, 0.0, t, 0.0, 0.0), abs(accel)
         after_reject, err_prev = bool(False), 1.0
-        crossings, memo = 0, (math.nan, math.nan)  # zero crossings of the angle, coast's memo
+        # zero crossings of the angle, the last one's time and the step that held it (the
+        # bound of that time's error), the coast's memo
+        crossings, t_cross, h_cross, memo = 0, t0, 0.0, (math.nan, math.nan)
         # the events' values and rates at the step's start: the last step's end, or anew
         # where the flight moved otherwise (an event passed, a coast)
         start = events_at(t, y, f, data)
@@ -140,10 +142,16 @@ def make_flight(system):
             if refine:
                 best, best_value = track_peak(best, best_value, t, h, y, f, y1, f1, h,
                                               abs(accel1), p, method)
-            skip, crossings, data, memo = coast_on(angle, angle1, crossings, t, h, y1, f1,
-                                                   data, p, t0 + settings.horizon, memo)
+            skip, crossings, t_cross, h_cross, y1, f1, data, memo, coasted = coast_on(
+                angle, angle1, crossings, t_cross, h_cross, t, h, y1, f1, data, p,
+                t0 + settings.horizon, memo, method == METHOD_EXACT)
+            steps += coasted
             t, y, f, angle = t + skip + h, y1, f1, angle1
-            start = end if skip == 0.0 else events_at(t, y, f, data)
+            if skip != 0.0:
+                angle = monitor(t, y, f)[0]
+                start = events_at(t, y, f, data)
+            else:
+                start = end
             h, err_prev = next_step(y, start[0], data, p, settings, refine, h, err,
                                     after_reject, err_prev)
             after_reject = bool(False)
@@ -157,8 +165,9 @@ def make_step_control(system):
     """The flight loop's step sizes and its moves other than a step: ``start_step`` (the
     first: the exact flow's length or the method's initial step, capped by the ballistic
     return time of the gap the flight leaves, H4), ``next_step`` (after an accepted one),
-    ``events_at`` (the events' values and rates at a point) and ``coast_on`` (past whole
-    free periods after the monitored angle crossed zero, the system's ``coast``)."""
+    ``events_at`` (the events' values and rates at a point) and ``coast_on`` (past the
+    time no event can end, once the monitored angle has crossed zero twice, the system's
+    ``coast``)."""
     values, rates, start_gap, coast = (system.event_values, system.event_rates,
                                        system.start_gap, system.coast)
     has_exact = system.exact is not None
@@ -197,16 +206,20 @@ def make_step_control(system):
         return values(t, y, data), rates(t, y, f, data)
 
     @njit(**INLINE_OPTIONS)
-    def coast_on(angle, angle1, crossings, t, h, y1, f1, data, p, horizon_end, memo):
+    def coast_on(angle, angle1, crossings, t_cross, h_cross, t, h, y1, f1, data, p,
+                 horizon_end, memo, closed_form):
         """After a step from t to t + h in which the monitored angle went from ``angle``
-        to ``angle1``: (time skipped, crossings, data, memo)."""
-        if (angle < 0.0) == (angle1 < 0.0):
-            return 0.0, crossings, data, memo
-        crossings += 1
-        t_cross = t + h * angle / (angle - angle1)  # the chord's zero
-        skip, data, memo = coast(t_cross, crossings, h, t + h, y1, f1, data, p,
-                                 horizon_end - (t + h), memo)
-        return skip, crossings, data, memo
+        to ``angle1``: (time skipped, crossings, the last crossing's time and the step
+        that held it, the state after the skip, data, memo, the exact steps taken)."""
+        if (angle < 0.0) != (angle1 < 0.0):
+            crossings += 1
+            t_cross, h_cross = t + h * angle / (angle - angle1), h  # the chord's zero
+        if crossings < 2:
+            return 0.0, crossings, t_cross, h_cross, y1, f1, data, memo, 0
+        skip, t_cross, y1, f1, data, memo, steps = coast(
+            t_cross, crossings, h_cross, t + h, y1, f1, data, p, horizon_end - (t + h), memo,
+            closed_form)
+        return skip, crossings, t_cross, h_cross, y1, f1, data, memo, steps
 
     return start_step, next_step, events_at, coast_on
 

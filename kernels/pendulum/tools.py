@@ -32,7 +32,7 @@ from kernels import INNER_OPTIONS, INLINE_OPTIONS
 from kernels.extrema import peak_search
 from kernels.impact import Contact, System, no_coast
 from kernels.impact.events import make_illinois
-from kernels.impact.flight import Flight, make_flight
+from kernels.impact.flight import EXACT_REACH, Flight, make_flight
 from kernels.impact.impact_map import radical_inverse
 from kernels.impact.outcomes import FLIGHT_EVENT, NO_COST
 from kernels.impact.tangent import (DDPSI, DPHI, DPSI, DT, DW, Field,
@@ -462,44 +462,70 @@ COAST_MARGIN = 0.01
 
 def _swing_coast(model):
     """The coast of a driven pendulum's free flight past the blade (System.coast): at
-    constant rotor speed the free swing repeats exactly every 2 tau1 (the model's swing, in
-    closed form), and a contact needs |psi| <= window, i.e. a time within t_w (the swing's
-    bound) of a passage of psi = 0, at a rotor angle within beta(window) of a face. From
-    the second passage on, the last passage and those ahead (every tau1) are checked
-    against the faces; the whole swings before the first that could meet one are skipped,
-    up to the flight's horizon, and the faces passed meanwhile move on as the events would
-    have moved them. What stays is integrated as before; a striker that flies 100 turns
-    past the blade is no longer integrated for all of them (docs/models.md §5.5)."""
-    swing, psi_of = model.swing, model.psi
+    constant rotor speed the free swing is symmetric, so the state half a swing (tau1, the
+    model's swing, in closed form) on is the same state negated, and a contact needs
+    |psi| <= window, i.e. a time within t_w (the swing's bound) of a passage of psi = 0,
+    at a rotor angle within beta(window) of a face. The passages ahead (every tau1 from
+    the last, t_cross) are checked against the faces, and the time up to the spell of the
+    first that could meet one (within its reach of a face, and not yet behind) is skipped,
+    up to the flight's horizon: whole half swings, and where the flight is the model's
+    closed form (``closed_form``) the rest too, by exact steps; the faces passed meanwhile
+    move on as the events would have moved them. What stays is integrated as before: the
+    spells around the passages near a face (and without the closed form, the time to the
+    next spell that is less than a half swing) (docs/models.md §5.5)."""
+    swing, psi_of, rhs = model.swing, model.psi, model.rhs
+    has_exact = model.exact is not None
+    exact, exact_length = (model.exact, model.exact_length) if has_exact else (None, None)
 
-    @njit(**INLINE_OPTIONS)
-    def coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo):
+    @njit(**INNER_OPTIONS)
+    def coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo, closed_form):
         if crossings < 2:  # one whole swing flown first: its amplitude and peak are known
-            return 0.0, data, memo
+            return 0.0, t_cross, y, f, data, memo, 0
         lower, window, k, level, side = data
         if math.isnan(memo[0]):
             memo = swing(y, p, window)
         tau1, t_window = memo
         if not (tau1 > 0.0 and t_window < math.inf):
-            return 0.0, data, memo
+            return 0.0, t_cross, y, f, data, memo, 0
+        # a passage this near a face may meet it (the crossing's time is the chord's zero,
+        # inside a step of h), within this time of the passage
         reach = t_window + beta(window, k) + h + COAST_MARGIN
-        swings = 0
-        # the skipped time holds the rest of the last passage (j = 0), the next 2 swings - 1
-        # and the start of the one after: all must be clear of the faces
-        for j in range(2 * int(time_left / (2.0 * tau1)) + 1):
-            x = (t_cross + j * tau1 - lower) % TWO_PI  # passage j against the faces
+        spell = t_window + h + COAST_MARGIN
+        clear = time_left  # the time from t that no contact can end
+        for j in range(int((t + time_left - t_cross) / tau1) + 2):
+            passage = t_cross + j * tau1
+            if passage + spell < t:
+                continue  # its spell is behind
+            x = (passage - lower) % TWO_PI  # passage j against the faces
             if min(x, TWO_PI - x) <= reach:
+                clear = passage - spell - t
                 break
-            if j % 2 == 0:
-                swings = j // 2
-        if swings == 0:
-            return 0.0, data, memo
-        skip = 2.0 * tau1 * swings
+        if not clear > 0.0:
+            return 0.0, t_cross, y, f, data, memo, 0
+        halves = int(clear / tau1)
+        if has_exact and closed_form:
+            skip, rest = clear, clear - tau1 * halves
+        elif halves > 0:
+            skip, rest = tau1 * halves, 0.0
+        else:
+            return 0.0, t_cross, y, f, data, memo, 0
+        if halves % 2 == 1:
+            y, f = (-y[0], -y[1]), (-f[0], -f[1])
+        steps = 0
+        if has_exact and closed_form and rest > 0.0:
+            while rest > 0.0:  # NaN ends it too
+                length = min(rest, exact_length(y, p, EXACT_REACH))
+                y = exact(y, length, p)
+                rest -= length
+                steps += 1
+            f = rhs(y, p)
+        # the last passage at or before the landing (any within rounding of it is clear)
+        t_cross += tau1 * math.floor((t + skip - t_cross) / tau1)
         passed = math.floor(((t - lower) + beta(psi_of(y), k) + skip) / TWO_PI)
         if passed > 0.0:
             lower += TWO_PI * passed
             level, side = lower, 1.0
-        return skip, (lower, window, k, level, side), memo
+        return skip, t_cross, y, f, (lower, window, k, level, side), memo, steps
 
     return coast
 
