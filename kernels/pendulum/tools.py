@@ -509,12 +509,15 @@ def _swing_coast(model):
             skip, rest = tau1 * halves, 0.0
         else:
             return 0.0, t_cross, y, f, data, memo, 0
+        y0, f0 = y, f
         if halves % 2 == 1:
             y, f = (-y[0], -y[1]), (-f[0], -f[1])
         steps = 0
         if has_exact and closed_form and rest > 0.0:
             while rest > 0.0:  # NaN ends it too
                 length = min(rest, exact_length(y, p, EXACT_REACH))
+                if not length > 0.0:  # a state the exact flow cannot move: no coast
+                    return 0.0, t_cross, y0, f0, data, memo, 0
                 y = exact(y, length, p)
                 rest -= length
                 steps += 1
