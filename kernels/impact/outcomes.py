@@ -1,5 +1,6 @@
 """How a flight or an impact sequence ended, and what it cost: one enumeration, one record."""
 
+import math
 from collections import namedtuple
 
 from numba import njit
@@ -24,10 +25,14 @@ NO_COST = Counters(0, 0, 0)
 #: count at which it may be called not periodic before its budget (impact_map.settles_nowhere;
 #: 0: only at the budget); ``finer_by`` > 1: each sequence that reaches a cycle goes on from
 #: it at rtol and atol finer_by times smaller to the cycle there (a second solve that need
-#: not fly the transient again; 0: one solve)
+#: not fly the transient again; 0: one solve); where the first start's two stages differ by
+#: an estimated error over ``accept`` (pendulum/accuracy.cycle_error; ``margins``: the
+#: cycle's margins count in it), the case is to be solved again finer, and its other starts
+#: are not flown
 Settings = namedtuple("Settings", ["method", "rtol", "atol", "dt", "max_steps", "horizon",
-                                   "max_impacts", "starts", "verdict_from", "finer_by"],
-                      defaults=(1000, 1, 64, 0.0))
+                                   "max_impacts", "starts", "verdict_from", "finer_by",
+                                   "accept", "margins"],
+                      defaults=(1000, 1, 64, 0.0, math.inf, False))
 
 
 @njit(**INNER_OPTIONS)

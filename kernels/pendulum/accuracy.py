@@ -8,10 +8,13 @@ and report the section repeat tolerance; the rotor stop's closed form is exact t
 round-off.
 """
 
+import cmath
 import math
 
 import numpy as np
+from numba import njit
 
+from kernels import KERNEL_OPTIONS
 from kernels.impact.outcomes import SEQUENCE_CYCLE
 from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5
 from kernels.pendulum.cases import ROW
@@ -70,47 +73,68 @@ AUTO_ROUNDS = 3
 AUTO_FINEST = 1e-14
 
 
-def estimated_error(coarse, fine, margins=False):
-    """Relative difference of the cycle's values of two solves over the finer one's error
-    ratio: the estimated relative error of the finer solve; inf where the two disagree on
-    the outcome, the period or the chatter; NaN where neither has a cycle. The leading
-    multiplier (where asked for) counts on the unit circle's scale, |dmu|/max(1, |mu|): it
-    may be 0, and a sensitive blade design's multiplier was 1.3e-5 off at tol 1e-8 while
-    the other values met it. With ``margins`` (asked for) the slowest-over-fastest impact
-    ratio and the edge distance count too, on the scale of 1 (a ratio; radians): an edge
-    distance was 1.6e-7 off at tol 1e-8 after a flight of ten rotor turns, where the values
-    above met tol."""
-    values = [np.abs(coarse[:, j] - fine[:, j]) / np.abs(fine[:, j]) for j in ESTIMATED]
-    mu = [rows[:, ROW.modulus] * np.exp(1j * rows[:, ROW.angle]) for rows in (coarse, fine)]
-    values.append(np.abs(mu[0] - mu[1]) / np.maximum(1.0, np.abs(mu[1])))
+@njit(**KERNEL_OPTIONS)
+def cycle_error(coarse, fine, margins):
+    """The estimated relative error of the finer of two solves of one case, from their rows
+    (ROW): the largest relative difference of the cycle's values over the finer one's error
+    ratio; inf where the two disagree on the outcome, the period or the chatter; NaN where
+    neither has a cycle. The leading multiplier (where asked for) counts on the unit
+    circle's scale, |dmu|/max(1, |mu|): it may be 0, and a sensitive blade design's
+    multiplier was 1.3e-5 off at tol 1e-8 while the other values met it. With ``margins``
+    (asked for) the slowest-over-fastest impact ratio and the edge distance count too, on
+    the scale of 1 (a ratio; radians): an edge distance was 1.6e-7 off at tol 1e-8 after a
+    flight of ten rotor turns, where the values above met tol."""
+    for j in (ROW.outcome, ROW.period, ROW.chatter):
+        a, b = coarse[j], fine[j]
+        if (0.0 if math.isnan(a) else a) != (0.0 if math.isnan(b) else b):
+            return math.inf
+    if fine[ROW.outcome] != SEQUENCE_CYCLE:
+        return math.nan
+    diff = -math.inf
+    for j in ESTIMATED:
+        d = abs(coarse[j] - fine[j]) / abs(fine[j])
+        if not math.isnan(d):
+            diff = max(diff, d)
+    mu_coarse = coarse[ROW.modulus] * cmath.exp(1j * coarse[ROW.angle])
+    mu_fine = fine[ROW.modulus] * cmath.exp(1j * fine[ROW.angle])
+    d = abs(mu_coarse - mu_fine) / max(1.0, abs(mu_fine))
+    if not math.isnan(d):
+        diff = max(diff, d)
     if margins:
         for j in (ROW.speed_ratio, ROW.edge):
-            values.append(np.abs(coarse[:, j] - fine[:, j])
-                          / np.maximum(1.0, np.abs(fine[:, j])))
-    with np.errstate(invalid="ignore"):
-        diff = np.nanmax(np.where(np.isnan(values), -np.inf, values), axis=0)
-    error = diff / (AUTO_REFINE - 1.0)
-    same = ((coarse[:, ROW.outcome] == fine[:, ROW.outcome])
-            & (np.nan_to_num(coarse[:, ROW.period]) == np.nan_to_num(fine[:, ROW.period]))
-            & (np.nan_to_num(coarse[:, ROW.chatter]) == np.nan_to_num(fine[:, ROW.chatter])))
-    error = np.where(same, np.maximum(error, 0.0), np.inf)
-    return np.where(same & (fine[:, ROW.outcome] != SEQUENCE_CYCLE), np.nan, error)
+            d = abs(coarse[j] - fine[j]) / max(1.0, abs(fine[j]))
+            if not math.isnan(d):
+                diff = max(diff, d)
+    return max(diff / (AUTO_REFINE - 1.0), 0.0)
+
+
+@njit(**KERNEL_OPTIONS)
+def estimated_error(coarse, fine, margins=False):
+    """cycle_error of each case, from the rows of its two solves."""
+    errors = np.empty(coarse.shape[0])
+    for i in range(coarse.shape[0]):
+        errors[i] = cycle_error(coarse[i], fine[i], margins)
+    return errors
 
 
 def solve_auto(solve, cases, tol, margins=False):
     """auto on a system without a closed form: auto_method at AUTO_COARSE times the calibrated
     rtol, going on from each cycle AUTO_REFINE times finer, both again AUTO_REFINE times
     finer where the estimate exceeds AUTO_ACCEPT tol (``margins``: the cycle's margins
-    asked for count in it). ``solve(cases, method, rtol, atol, dt, finer_by) -> (rows,
-    first-stage rows)``. Counters add up every solve."""
+    asked for count in it). ``solve(cases, method, rtol, atol, dt, finer_by, accept,
+    margins) -> (rows, first-stage rows)``. Counters add up every solve."""
     rtol = AUTO_COARSE * auto_rtol(tol)
     rows = np.empty((cases.shape[0], len(ROW)))
     pending = np.arange(cases.shape[0])
     counters = [ROW.steps, ROW.rejected, ROW.events]
     spent = np.zeros((cases.shape[0], len(counters)))
-    for _ in range(AUTO_ROUNDS):
+    for round_ in range(AUTO_ROUNDS):
+        # a case whose estimate misses is solved again, unless this round is its last: its
+        # other starts are then flown only in the round it ends in (Settings.accept)
+        last = round_ == AUTO_ROUNDS - 1 or rtol / AUTO_REFINE ** 2 < AUTO_FINEST
         fine, coarse = solve(cases[pending], auto_method(tol), rtol, rtol * AUTO_ATOL_PER_RTOL,
-                             0.0, AUTO_REFINE)
+                             0.0, AUTO_REFINE, math.inf if last else AUTO_ACCEPT * tol,
+                             margins)
         spent[pending] += fine[:, counters]
         fine[:, ROW.error] = estimated_error(coarse, fine, margins)
         rows[pending] = fine

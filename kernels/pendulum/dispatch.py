@@ -3,6 +3,8 @@ the method allows it, else the integration core on its system (kernels/pendulum/
 systems.py, imported, and compiled, only when a block has a case of it), by the accuracy
 policy (accuracy.py). Every choice is read from the table of systems (table.py)."""
 
+import math
+
 import numpy as np
 
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_SEPARATRIX
@@ -51,11 +53,12 @@ def _integrated(system, cases, method, stability, starts):
     from kernels.pendulum import systems
     from kernels.pendulum.systems import section_repeat_tol
 
-    def solve(sub, method_code, rtol, atol, dt, finer_by=0.0):
+    def solve(sub, method_code, rtol, atol, dt, finer_by=0.0, accept=math.inf,
+              margins=False):
         entry = systems.entry_point(system, method_code, stability, finer_by > 0.0, starts)
         return solve_system(entry, sub, systems.settings_for(
-            system, method_code, rtol, atol, dt, method.max_impacts, starts, finer_by),
-            first_stage=finer_by > 0.0)
+            system, method_code, rtol, atol, dt, method.max_impacts, starts, finer_by,
+            accept, margins), first_stage=finer_by > 0.0)
 
     # auto keeps DOPRI5's two stages where the multipliers are asked for: the tangent is
     # integrated, and its error needs their estimate (estimated_error)

@@ -19,7 +19,8 @@ from kernels.impact.impact_map import (ATTRACTOR_TOL, KNOWN, known_attractor,
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_MAX_STEPS, Settings, add
 from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_RK4, low_order
 from kernels.pendulum import models, tools
-from kernels.pendulum.cases import C, ROW
+from kernels.pendulum.accuracy import cycle_error
+from kernels.pendulum.cases import C, N_ROW, ROW
 from kernels.pendulum.table import RETURNING_TOOLS, SYSTEMS, entry_name
 
 
@@ -128,6 +129,7 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
         # per start: its steady state in the columns of impact_map.KNOWN
         seen = np.empty((starts, KNOWN.key + MAX_KEY))
         scratch = np.empty((1, 2))
+        pair = np.empty((2, N_ROW))  # the rows of the first start's two stages
         for c in range(cases.shape[0]):
             case = cases[c]
             row = rows[c]
@@ -138,7 +140,14 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
             attractors, basin = 1.0, 1.0
             # its own test, so that numba prunes the other starts for a single one
             if several_starts:
-                if starts > 1:
+                # a case solved again finer (its estimate misses settings.accept) counts
+                # its attractors only in the solve it ends in
+                write_row(pair[0], first, first.cost, 1.0, 1.0, frequency)
+                write_row(pair[1], s, s.cost, 1.0, 1.0, frequency)
+                again = cycle_error(pair[0], pair[1], settings.margins) > settings.accept
+                if again:
+                    attractors, basin = math.nan, math.nan
+                elif starts > 1:
                     n_keys = len(s.key)
                     remember(seen, int(0), s)
                     distinct, same = int(1), int(1)
@@ -169,7 +178,8 @@ def scaled_settings(s, method, by, finer_by):
     """Settings ``s`` by ``method`` at rtol and atol ``by`` times smaller."""
     return Settings(method=method, rtol=s.rtol / by, atol=s.atol / by, dt=s.dt,
                     max_steps=s.max_steps, horizon=s.horizon, max_impacts=s.max_impacts,
-                    starts=s.starts, verdict_from=s.verdict_from, finer_by=finer_by)
+                    starts=s.starts, verdict_from=s.verdict_from, finer_by=finer_by,
+                    accept=s.accept, margins=s.margins)
 
 
 @njit(**INLINE_OPTIONS)
@@ -293,10 +303,12 @@ def entry_point(system, method, tangent=False, two_stage=False, starts=1):
                         bool(two_stage), starts > 1]
 
 
-def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1, finer_by=0.0):
+def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1, finer_by=0.0,
+                 accept=math.inf, margins=False):
     """The Settings of a solve on a system (a table row), by name."""
     return Settings(method=int(method), rtol=float(rtol), atol=float(atol), dt=float(dt),
                     max_steps=MAX_STEPS,
                     horizon=float(CONTACTS[system.model, system.tool, False].horizon),
                     max_impacts=int(max_impacts), starts=int(starts),
-                    verdict_from=VERDICT_FROM, finer_by=float(finer_by))
+                    verdict_from=VERDICT_FROM, finer_by=float(finer_by),
+                    accept=float(accept), margins=bool(margins))
