@@ -102,9 +102,15 @@ def _units(ds: xr.Dataset, name: str, degrees: bool) -> str:
     return "-" if units in ("1", "") else units
 
 
-def _label(ds: xr.Dataset, name: str, degrees: bool = False) -> str:
-    long_name = textwrap.fill(ds[name].attrs.get("long_name", name), 48)
+def _label(ds: xr.Dataset, name: str, degrees: bool = False, width: int = 48) -> str:
+    """An axis label: the name, its units and its long name wrapped at ``width``
+    characters (narrower along a vertical axis, which is shorter than the text)."""
+    long_name = textwrap.fill(ds[name].attrs.get("long_name", name), width)
     return f"{name} [{_units(ds, name, degrees)}]\n{long_name}"
+
+
+#: the wrap of a label along a vertical axis: a 4-inch axis holds about 36 characters
+VERTICAL_LABEL_WIDTH = 32
 
 
 def _shown(var: xr.DataArray, degrees: bool, ds: xr.Dataset | None = None) -> np.ndarray:
@@ -365,7 +371,7 @@ def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = Tr
                                       colors="#d62728", linewidths=1.6, linestyles="--")
                     ax.clabel(mark, fmt={value: meaning.split(":")[0]}, fontsize=8)
         ax.set_xlabel(_label(ds, x, degrees))
-        ax.set_ylabel(_label(ds, y, degrees))
+        ax.set_ylabel(_label(ds, y, degrees, VERTICAL_LABEL_WIDTH))
         if k is not None:
             ax.set_title(_panel_title(ds, facet_dims[0], k, degrees), fontsize=9)
         for name, values, axis, scale in ((x, x_values, ax.xaxis, ax.set_xscale),
@@ -387,7 +393,7 @@ def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = Tr
         handles += [Patch(color=colour_of[c], label=names[c]) for c in present]
     else:
         bar = fig.colorbar(mesh, ax=axes.ravel().tolist(), shrink=0.9)
-        bar.set_label(_label(ds, color, degrees))
+        bar.set_label(_label(ds, color, degrees, VERTICAL_LABEL_WIDTH))
         if isinstance(norm, mcolors.LogNorm):
             _plain_log_axis(bar.ax.yaxis)
         for value, meaning in marks:

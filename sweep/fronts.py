@@ -263,7 +263,7 @@ def figure(ds: xr.Dataset, result: Front, where: str | None = None, degrees: boo
     any, colours the front), the designs left out in greys named by why, and the pick."""
     from matplotlib.figure import Figure
 
-    from sweep.charts import BLANK_GREYS, _label, _shown, made_by
+    from sweep.charts import BLANK_GREYS, VERTICAL_LABEL_WIDTH, _label, _shown, made_by
 
     objectives_ = result.objectives
     if len(objectives_) < 2:
@@ -299,7 +299,7 @@ def figure(ds: xr.Dataset, result: Front, where: str | None = None, degrees: boo
         z = objectives_[2].name
         marks = ax.scatter(fx, fy, c=np.asarray(_shown(front_ds[z], degrees, ds), float),
                            s=22, zorder=4, cmap="viridis", label="front")
-        fig.colorbar(marks, ax=ax, label=_label(ds, z, degrees))
+        fig.colorbar(marks, ax=ax, label=_label(ds, z, degrees, VERTICAL_LABEL_WIDTH))
         ax.plot(fx, fy, "-", color="#08306b", lw=0.8, zorder=3)
     else:
         ax.plot(fx, fy, "o-", color="#08306b", ms=4, lw=1.2, zorder=4,
@@ -312,7 +312,7 @@ def figure(ds: xr.Dataset, result: Front, where: str | None = None, degrees: boo
         pad = 0.05 * (hi - lo) if hi > lo else 0.05 * max(abs(hi), 1.0)  # not the rest
         axis(lo - pad, hi + pad)
     ax.set_xlabel(_label(ds, x, degrees) + f"  ({objectives_[0].sense})")
-    ax.set_ylabel(_label(ds, y, degrees) + f"  ({objectives_[1].sense})")
+    ax.set_ylabel(_label(ds, y, degrees, VERTICAL_LABEL_WIDTH) + f"  ({objectives_[1].sense})")
     ax.legend(loc="best", fontsize=8)
     title = ds.attrs.get("title", "")
     ax.set_title((f"Pareto front: {title}" if title else "Pareto front") + f"\n{made_by()}",
