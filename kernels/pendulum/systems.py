@@ -94,7 +94,9 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
         one-row log for the second stage, whose sections stay out of ``log``. A regime
         without a cycle is the first stage's, unless it is undetermined (the budget ran
         out while the sequence still converged); where the second stage does not confirm
-        the first one's cycle (its period and chatter), the finer solve starts again."""
+        the first one's cycle (its period and chatter), the finer solve starts again,
+        except from rest where auto's next round follows (settings.accept < inf): that
+        round starts with the same solve."""
         first, t, y, d = steady(p, data, r, settings, tols[0], log, start, known)
         if not two_stage:  # its own test, so that numba prunes the second stage away
             return first, first
@@ -110,6 +112,11 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
             cost = add(cost, then.cost)
             if (then.outcome == SEQUENCE_CYCLE and then.period == first.period
                     and then.chatter == first.chatter):
+                return with_cost(then, first.impacts, cost), first
+            if start == 0 and settings.accept < math.inf:
+                # auto's next solve follows (Settings.accept), its first stage the finer
+                # solve from the start below: the two rows disagree, which sends the case
+                # there, so that sequence is flown once
                 return with_cost(then, first.impacts, cost), first
         # undetermined, or not the first stage's cycle where it went on from it (a slow
         # drift taken for a cycle, a chatter that settles otherwise): the finer solve from
