@@ -80,11 +80,17 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("example", nargs="?", default="rotary_pendulum_stability")
     args = parser.parse_args()
-    sweep = spec.parse((EXAMPLES / f"{args.example}.toml").read_text())
-    if sweep.method_record.integrator != dispatch.INTEGRATOR_AUTO:
+    path = EXAMPLES / f"{args.example}.toml"
+    if not path.is_file():
+        sys.exit(f"example: no built-in example {args.example!r}; allowed: "
+                 + ", ".join(sorted(p.stem for p in EXAMPLES.glob("*.toml"))))
+    sweep = spec.parse(path.read_text())
+    if getattr(sweep.method_record, "integrator", None) != dispatch.INTEGRATOR_AUTO:
         sys.exit(f"example: {args.example} does not solve by auto")
     recorded_rounds(sweep)  # compile
     rounds = recorded_rounds(sweep)
+    if not rounds:
+        sys.exit(f"example: {args.example} takes no rounds (closed forms or exact flights)")
     total = sum(r["steps"] for r in rounds)
     share = {}  # of all steps, by the outcome a round's rows end with; cycles by round
     for j, r in enumerate(rounds):
