@@ -115,7 +115,7 @@ def test_the_early_verdict_agrees_with_the_long_run_on_random_blade_designs(mode
     rtol, atol, dt = exact_settings(1e-6) if method == METHOD_EXACT else (1e-9, 1e-9, 0.0)
     early, long = (solve_system(systems.entry_point(row, method), cases, Settings(
         method=method, rtol=rtol, atol=atol, dt=dt, max_steps=systems.MAX_STEPS,
-        horizon=systems.CONTACTS[row.model, row.tool, False].horizon, max_impacts=budget,
+        horizon=systems.CONTACTS[row.model, row.tool, ()].horizon, max_impacts=budget,
         starts=1, verdict_from=verdict)) for verdict in (systems.VERDICT_FROM, 0))
     values = [j for j in range(N_ROW) if j not in COUNTERS]
     np.testing.assert_array_equal(early[:, values], long[:, values])
@@ -140,7 +140,7 @@ def test_the_early_verdict_leaves_slowly_converging_period_n_cycles_to_the_budge
     row = table.BY_CODES[table.MODELS["rotor"], table.TOOLS["lab_window"]]
     early, long = (solve_system(systems.entry_point(row, METHOD_DOPRI5), cases, Settings(
         method=METHOD_DOPRI5, rtol=rtol, atol=rtol, dt=0.0, max_steps=systems.MAX_STEPS,
-        horizon=systems.CONTACTS[row.model, row.tool, False].horizon, max_impacts=1000,
+        horizon=systems.CONTACTS[row.model, row.tool, ()].horizon, max_impacts=1000,
         starts=1, verdict_from=verdict)) for verdict in (systems.VERDICT_FROM, 0))
     assert np.all(long[:, ROW.outcome] == SEQUENCE_CYCLE) and np.all(long[:, ROW.period] > 1)
     values = [j for j in range(N_ROW) if j not in COUNTERS]

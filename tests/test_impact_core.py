@@ -586,7 +586,7 @@ def test_a_failed_fixed_point_jump_keeps_the_secant_jacobian():
     from kernels.impact.impact_map import Acceleration, make_accelerators
     from kernels.pendulum import systems
 
-    contact = systems.CONTACTS["rotor", "rotor_stop", False]
+    contact = systems.CONTACTS["rotor", "rotor_stop", ()]
     inner, first = make_accelerators(contact)[1], contact.first
 
     @njit

@@ -15,7 +15,7 @@ import pytest
 from numba import njit
 
 from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings
-from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5, METHOD_EXACT
+from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5, METHOD_EXACT, METHOD_RK4
 from kernels.pendulum import dispatch, models, systems, table, tools
 from kernels.pendulum.accuracy import exact_settings
 from kernels.pendulum.cases import CASE_COLUMNS, N_ROW, ROW, C
@@ -88,26 +88,28 @@ def test_a_toy_surface_through_the_table_is_the_rotor_stop_mirrored(model):
     np.testing.assert_array_equal(toy[~cycle, ROW.outcome], builtin[~cycle, ROW.outcome])
 
 
-def test_dop853_compiled_in_or_not_dopri5_takes_the_same_steps():
-    """The entry points without DOP853 (the default's: it is compiled only for the blocks
-    that ask for it) give DOPRI5's bits to the last digit, and step by DOPRI5 where DOP853
-    is asked for (runge_kutta.low_order); the ones with it do integrate by DOP853."""
+def test_dop853_or_rk4_compiled_in_or_not_dopri5_takes_the_same_steps():
+    """The entry points without DOP853 and RK4 (the default's: each is compiled only for
+    the blocks that ask for it) give DOPRI5's bits to the last digit, as do those with
+    either, and step by DOPRI5 where DOP853 is asked for (runge_kutta.low_order); the ones
+    with DOP853 do integrate by it."""
     rng = np.random.default_rng(40)
     n = 12
     k, xi, r = rng.uniform(0.5, 3.0, n), rng.uniform(1.0, 8.0, n), rng.uniform(0.0, 0.4, n)
     stop = cases_of("paper", k, xi, np.zeros(n), r)
     row = table.BY_CODES[table.MODELS["paper"], table.TOOLS["rotor_stop"]]
 
-    def rows(method, high):
+    def rows(method, compiled):
         settings = systems.settings_for(row, method, 1e-10, 1e-12, 0.0, 200)
-        return dispatch.solve_system(systems.ENTRY_POINTS[row, False, high, False, False], stop,
-                                     settings)
+        return dispatch.solve_system(systems.ENTRY_POINTS[row, False, compiled, False, False],
+                                     stop, settings)
 
-    dopri5 = rows(METHOD_DOPRI5, False)
+    dopri5 = rows(METHOD_DOPRI5, ())
     assert (dopri5[:, ROW.outcome] == SEQUENCE_CYCLE).sum() >= n // 2
-    np.testing.assert_array_equal(rows(METHOD_DOPRI5, True), dopri5)
-    np.testing.assert_array_equal(rows(METHOD_DOP853, False), dopri5)
-    dop853 = rows(METHOD_DOP853, True)
+    np.testing.assert_array_equal(rows(METHOD_DOPRI5, (METHOD_DOP853,)), dopri5)
+    np.testing.assert_array_equal(rows(METHOD_DOPRI5, (METHOD_RK4,)), dopri5)
+    np.testing.assert_array_equal(rows(METHOD_DOP853, ()), dopri5)
+    dop853 = rows(METHOD_DOP853, (METHOD_DOP853,))
     stepped = dopri5[:, ROW.steps] > 0  # an escape decided before a flight takes none
     assert stepped.sum() >= n // 2
     assert np.all(dop853[stepped, ROW.steps] < dopri5[stepped, ROW.steps] / 2)
@@ -136,9 +138,9 @@ def test_the_leanest_entry_point_gives_the_bits_of_the_fullest_at_one_start(mode
     rtol, atol, dt = exact_settings(1e-6) if method == METHOD_EXACT else (1e-9, 1e-9, 0.0)
     settings = systems.settings_for(row, method, rtol, atol, dt, 200)
     lean = dispatch.solve_system(systems.entry_point(row, method), cases, settings)
-    full = dispatch.solve_system(systems.ENTRY_POINTS[row, False, False, True, True], cases,
+    full = dispatch.solve_system(systems.ENTRY_POINTS[row, False, (), True, True], cases,
                                  settings)
-    assert systems.entry_point(row, method) is systems.ENTRY_POINTS[row, False, False, False,
+    assert systems.entry_point(row, method) is systems.ENTRY_POINTS[row, False, (), False,
                                                                     False]
     assert (lean[:, ROW.outcome] == SEQUENCE_CYCLE).sum() >= n // 4
     np.testing.assert_array_equal(lean, full)
@@ -149,15 +151,17 @@ def test_entry_points_and_dispatch_follow_the_table():
     row says the multipliers need it, each compiled function named after its row; the
     row's flags agree with what its contact and model do."""
     for row in table.SYSTEMS:
-        for method, high in ((METHOD_DOPRI5, False), (METHOD_DOP853, True)):
+        for method, compiled in ((METHOD_DOPRI5, ()), (METHOD_EXACT, ()),
+                                 (METHOD_DOP853, (METHOD_DOP853,)), (METHOD_RK4, (METHOD_RK4,))):
             for two in (False, True):
                 for tangent in (False, True):
                     for starts in (1, 8):
                         entry = systems.entry_point(row, method, tangent, two, starts)
                         assert entry.py_func.__name__ == table.entry_name(
-                            row, tangent and row.tangent, high, two, starts > 1)
-                assert ((row, True, high, two, False) in systems.ENTRY_POINTS) == row.tangent
-        contact = systems.CONTACTS[row.model, row.tool, False]
+                            row, tangent and row.tangent, compiled, two, starts > 1)
+                assert (((row, True, compiled, two, False) in systems.ENTRY_POINTS)
+                        == row.tangent)
+        contact = systems.CONTACTS[row.model, row.tool, ()]
         model = getattr(models, row.model.upper())
         assert (contact.pressed is not tools.never) == row.slide
         assert contact.smooth == (row.tool == "rotor_stop")

@@ -44,6 +44,7 @@ from collections import namedtuple
 from numba import njit
 
 from kernels import INLINE_OPTIONS
+from kernels.impact.runge_kutta import OTHER_METHODS
 
 
 @njit(**INLINE_OPTIONS)
@@ -62,16 +63,16 @@ def no_coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo, closed_fo
 #: calls of one flight, NaN at its start; closed_form: whether the flight is the exact
 #: flow's; steps: the exact steps it took, counted with the flight's); where the flow is
 #: known in closed form, ``exact(y, h, p)`` and ``exact_length(y, p, length)``, its step
-#: for runge_kutta.METHOD_EXACT; ``high_order``: whether DOP853 is compiled into its flights
-#: (runge_kutta.make_stepper; a pendulum block made without it solves by DOPRI5 where DOP853
+#: for runge_kutta.METHOD_EXACT; ``methods``: those compiled into its flights beside DOPRI5
+#: (runge_kutta.make_stepper; a pendulum block made without DOP853 solves by DOPRI5 where it
 #: is asked for, systems.make_block); ``clear_time(y, values_now, data, p)``: a time within
 #: which no event can fire from the state y, whose event values are ``values_now`` (a lower
 #: bound, from bounds on the events' rates), up to which an exact flight that refines
 #: nothing steps past exact_length
 System = namedtuple("System", ["rhs", "scales", "event_values", "event_rates", "directions",
                                "on_event", "start_gap", "monitor", "coast", "exact",
-                               "exact_length", "high_order", "clear_time"],
-                    defaults=(no_coast, None, None, True, None))
+                               "exact_length", "methods", "clear_time"],
+                    defaults=(no_coast, None, None, OTHER_METHODS, None))
 
 #: what happens at a contact, for the impact map (impact_map.py). ``model``: the flying
 #: body's functions the map needs (namedtuple fields response(y, J_phi, J_psi, p) = M^-1 J^T

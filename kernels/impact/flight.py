@@ -35,7 +35,8 @@ from kernels.extrema import peak_search
 from kernels.impact.events import make_bisection, make_locator
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW, Counters)
-from kernels.impact.runge_kutta import (METHOD_DOP853, METHOD_EXACT, accepted_step_size,
+from kernels.impact.runge_kutta import (METHOD_DOP853, METHOD_EXACT, METHOD_RK4,
+                                        accepted_step_size,
                                         ballistic_cap, initial_step, make_stepper,
                                         low_order, rejected_step_size)
 from kernels.impact.tuples import hermite, hermite_slope
@@ -73,11 +74,11 @@ def _never_clear(y, values_now, data, p):
 def make_flight(system):
     """The flight loop of a system (see the module docstring): ``(flight, step)``."""
     rhs, monitor, on_event = system.rhs, system.monitor, system.on_event
-    step = make_stepper(rhs, system.scales, system.exact, system.high_order)
+    step = make_stepper(rhs, system.scales, system.exact, system.methods)
     locate = make_locator(system.event_values, system.event_rates, system.directions, step)
     polish = make_polish(system.event_values, system.event_rates, step)
     turning_angle = make_turning_angle(monitor, step)
-    track_peak, final_peak = make_peak(monitor, step, system.high_order)
+    track_peak, final_peak = make_peak(monitor, step, METHOD_DOP853 in system.methods)
     start_step, next_step, events_at, coast_on = make_step_control(system)
 
     @njit(**INNER_OPTIONS)
@@ -369,7 +370,7 @@ def make_peak(monitor, step, high_order=True):
     return track_peak, final_peak
 
 
-def make_timed_flight(rhs, scales):
+def make_timed_flight(rhs, scales, methods=(METHOD_RK4,)):
     """``timed_flight(t0, y0, t1, p, settings) -> (reached, y)``: the state at a known time
     t1 from y0 at t0, by the flight loop's steps and step-size control, the last step cut
     to land on t1. For an integration whose end is known (the variational equations
@@ -377,8 +378,8 @@ def make_timed_flight(rhs, scales):
     ``reached`` is False where a step underflowed, the state stopped being finite, or the
     step budget ran out. DOP853 is not compiled in: asked for, these flights take DOPRI5
     at its rtol (the tangent's 20-component step made the stability example's first run
-    1.17 times the code's before DOP853)."""
-    step = make_stepper(rhs, scales, high_order=False)
+    1.17 times the code's before DOP853); RK4 only where ``methods`` has it."""
+    step = make_stepper(rhs, scales, methods=tuple(m for m in methods if m != METHOD_DOP853))
 
     @njit(**INNER_OPTIONS)
     def timed_flight(t0, y0, t1, p, settings):

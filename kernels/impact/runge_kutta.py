@@ -22,6 +22,9 @@ from kernels.impact.tuples import error_norm, lincomb, weighted
 #: controller) unless the system has an exact flow and METHOD_EXACT is asked for (the
 #: slides and the tangent of a closed-form flight are integrated by DOPRI5)
 METHOD_RK4, METHOD_DOPRI5, METHOD_EXACT, METHOD_DOP853 = 0, 1, 2, 3
+#: the methods a stepper may have beside DOPRI5 (and the exact flow): make_stepper's
+#: ``methods``, all of them unless told
+OTHER_METHODS = (METHOD_DOP853, METHOD_RK4)
 
 # Dormand-Prince 5(4): nodes are implicit in the stages; weights b (5th order), and the
 # error weights e = b5 - b4
@@ -84,14 +87,16 @@ def _no_exact(y, h, p):
     return y
 
 
-def make_stepper(rhs, scales, exact=None, high_order=True):
+def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS):
     """The step of the methods, specialised to rhs, the error scales and, where the system
     has one, its exact flow ``exact(y, h, p)`` (its error estimate is 0); a system without
-    one takes DOPRI5's step for METHOD_EXACT (the rule at METHOD_EXACT). Without
-    ``high_order`` DOP853 is not compiled in, and its callers step by DOPRI5
-    (``low_order``)."""
+    one takes DOPRI5's step for METHOD_EXACT (the rule at METHOD_EXACT). DOPRI5 is always
+    compiled in, DOP853 and RK4 where ``methods`` has them: without DOP853 its callers step
+    by DOPRI5 (``low_order``); without RK4 they never ask for it (a pendulum system's entry
+    point is chosen by its method, systems.entry_point)."""
     has_exact = exact is not None
     exact = exact if has_exact else _no_exact
+    high_order, fixed_step = METHOD_DOP853 in methods, METHOD_RK4 in methods
 
     @njit(**INNER_OPTIONS)
     def dopri5(y, f0, h, p):
@@ -142,11 +147,12 @@ def make_stepper(rhs, scales, exact=None, high_order=True):
                 y1, f1, err5, err3 = dop853(y, f0, h, p)
                 scale = scales(y, y1, rtol, atol)
                 return y1, f1, dop853_error(error_norm(err5, scale), error_norm(err3, scale))
-        if method != METHOD_RK4:
-            y1, f1, err = dopri5(y, f0, h, p)
-            return y1, f1, error_norm(err, scales(y, y1, rtol, atol))
-        y1, f1 = rk4(y, f0, h, p)
-        return y1, f1, 0.0
+        if fixed_step:  # (as DOP853: pruned away without it)
+            if method == METHOD_RK4:
+                y1, f1 = rk4(y, f0, h, p)
+                return y1, f1, 0.0
+        y1, f1, err = dopri5(y, f0, h, p)
+        return y1, f1, error_norm(err, scales(y, y1, rtol, atol))
 
     return step
 
@@ -163,8 +169,8 @@ def dop853_error(rms5, rms3):
 
 @njit(**INLINE_OPTIONS)
 def low_order(method):
-    """The method a stepper made without ``high_order`` takes for ``method``: DOPRI5 for
-    DOP853, so that its step-size control is the step's."""
+    """The method a stepper made without DOP853 takes for ``method``: DOPRI5 for DOP853,
+    so that its step-size control is the step's."""
     return METHOD_DOPRI5 if method == METHOD_DOP853 else method
 
 

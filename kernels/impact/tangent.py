@@ -38,6 +38,7 @@ from numba import njit
 
 from kernels import INNER_OPTIONS, INLINE_OPTIONS
 from kernels.impact.flight import make_timed_flight
+from kernels.impact.runge_kutta import METHOD_RK4
 from kernels.impact.tuples import relative_scales
 
 #: the rows of a perturbation's coordinates
@@ -58,7 +59,7 @@ def _generated(name: str, args: str, body: list[str], namespace: dict):
     return njit(**INLINE_OPTIONS)(namespace[name])
 
 
-def make_variational(model, n):
+def make_variational(model, n, methods=(METHOD_RK4,)):
     """``flow_derivative(t0, y0, t1, p, settings) -> (reached, Y)``: the derivative Y (row-
     major n x n) of the flow of ``model`` (a Field: a model, or a slide's constrained
     system) from t0 to t1 at y0, by the variational equations on the augmented state."""
@@ -82,7 +83,7 @@ def make_variational(model, n):
                         ns)
     matrix = _generated("matrix", "z", [f"return {tangent}"], ns)
 
-    fly = make_timed_flight(rhs, scales)
+    fly = make_timed_flight(rhs, scales, methods)
 
     @njit(**INNER_OPTIONS)
     def flow_derivative(t0, y0, t1, p, settings):
@@ -181,9 +182,10 @@ def make_acceleration_differential(model, n):
     return differential
 
 
-def make_tracker(c, n):
+def make_tracker(c, n, methods=(METHOD_RK4,)):
     """The tangent's updates for a Contact (see the module docstring): the section's
-    coordinates at the start, through a flight, through a contact, and the multiplier."""
+    coordinates at the start, through a flight, through a contact, and the multiplier;
+    ``methods``: those compiled into its flights beside DOPRI5 (make_timed_flight)."""
     driven, gradient = c.model.driven, c.event_gradient
 
     @njit(**INNER_OPTIONS)
@@ -220,16 +222,17 @@ def make_tracker(c, n):
                 a[i, j] = tangent[rows[i], j]
         return leading_multiplier(a, d)
 
-    return Tracker(start, make_tangent_flight(c, n), make_tangent_law(c), multiplier)
+    return Tracker(start, make_tangent_flight(c, n, methods), make_tangent_law(c),
+                   multiplier)
 
 
-def make_tangent_flight(c, n):
+def make_tangent_flight(c, n, methods=(METHOD_RK4,)):
     """The columns carried through a flight: the variational equations to the event and
-    its time's shift (the saltation at a moving event)."""
+    its time's shift (the saltation at a moving event); ``methods`` as make_tracker's."""
     model, gradient = c.model, c.event_gradient
     state, coordinates = model.tangent_state, model.tangent_coordinates
     monitor, rotor_speed = model.monitor, model.rotor_speed
-    flow_derivative = make_variational(model, n)
+    flow_derivative = make_variational(model, n, methods)
     carry = make_event_carry(n)
 
     @njit(**INNER_OPTIONS)

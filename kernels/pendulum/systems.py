@@ -17,7 +17,7 @@ from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact.impact_map import (ATTRACTOR_TOL, KNOWN, known_attractor,
                                        make_impact_map, relative_distance, with_cost)
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_MAX_STEPS, Settings, add
-from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_RK4, low_order
+from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_RK4, OTHER_METHODS, low_order
 from kernels.pendulum import models, tools
 from kernels.pendulum.accuracy import cycle_error
 from kernels.pendulum.cases import C, N_ROW, ROW
@@ -66,7 +66,7 @@ MAX_KEY = 3
 
 
 def make_block(contact, jump_early, parameters, data_of, frequency, stability=False,
-               high_order=True, two_stage=True, several_starts=True):
+               methods=OTHER_METHODS, two_stage=True, several_starts=True):
     """The block function of a system, ``block(cases, settings, rows, first_rows, log)``:
     each case's steady state into its row (ROW), and into ``log`` the section impacts
     (rotor angle mod 2 pi, psi) of the last case. ``frequency``: whether flights end where
@@ -76,15 +76,18 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     from starts - 1 more starting states (the tool's ``first``), and the distinct
     attractors they reach are counted. With ``settings.finer_by`` > 1 each sequence that
     reaches a cycle goes on from it at rtol and atol finer_by times smaller: ``rows`` get
-    that second stage's values, ``first_rows`` the first's (else the same). Without
-    ``high_order`` (a contact whose flights have no DOP853) DOP853 asked for is DOPRI5
-    (runge_kutta.low_order), its step-size control included. Without ``two_stage`` the
+    that second stage's values, ``first_rows`` the first's (else the same). ``methods``:
+    those the contact's flights have beside DOPRI5; without DOP853, DOP853 asked for is
+    DOPRI5 (runge_kutta.low_order), its step-size control included; without RK4, RK4 is
+    never asked for (entry_point). Without ``two_stage`` the
     second stage is not compiled in, and every solve is the first stage's whatever
     settings.finer_by: the solves that never take it (exact flights, a forced method) do
     not pay for its compile. Without ``several_starts`` each case runs from rest only,
     whatever settings.starts, and the search for other starts' cycles is not compiled
     in."""
-    driver = make_impact_map(contact, jump_early, stability, several_starts, two_stage)
+    high_order = METHOD_DOP853 in methods
+    driver = make_impact_map(contact, jump_early, stability, several_starts, two_stage,
+                             tuple(m for m in methods if m != METHOD_DOP853))
     steady, settle = driver.steady, driver.settle
 
     # one stage: a call of steady, inlined (one function fewer to compile)
@@ -244,9 +247,11 @@ PARAMETERS = {"paper": paper_parameters, "rigid": rigid_parameters,
 DATA = {"rotor_stop": rotor_stop_data, "lab_window": lab_window_data}
 #: each system's contact (the core's description of it), by the table's names, without and
 #: with DOP853 in its flights
-CONTACTS = {(s.model, s.tool, high): getattr(tools, s.tool)(getattr(models, s.model.upper()),
-                                                            high)
-            for s in SYSTEMS for high in (False, True)}
+#: the methods compiled into a contact's flights beside DOPRI5 (and the exact flow), one
+#: variant each: none, DOP853 (tight tol), RK4 (asked for)
+COMPILED = ((), (METHOD_DOP853,), (METHOD_RK4,))
+CONTACTS = {(s.model, s.tool, methods): getattr(tools, s.tool)(
+    getattr(models, s.model.upper()), methods) for s in SYSTEMS for methods in COMPILED}
 #: a flight's step budget
 MAX_STEPS = 10 ** 6
 #: the first section count at which a sequence may be called not periodic before its
@@ -255,16 +260,16 @@ VERDICT_FROM = 64
 
 
 def build_block(system, contact, parameters, data_of, stability=False, returning=None,
-                high_order=True, two_stage=True, several_starts=True):
+                methods=OTHER_METHODS, two_stage=True, several_starts=True):
     """The block function of a table row (kernels/pendulum/table.py) from its contact,
     its parameters and system data of a case; ``returning``: whether its flights end
     where they started (default: its tool is one of table.RETURNING_TOOLS);
-    ``high_order``: whether the contact's flights have DOP853; ``two_stage``: whether
+    ``methods``: those the contact's flights have beside DOPRI5; ``two_stage``: whether
     auto's second stage is compiled in; ``several_starts``: whether a case may run from
     several starts (make_block)."""
     returning = system.tool in RETURNING_TOOLS if returning is None else returning
     return make_block(contact, system.affine, parameters, data_of, returning, stability,
-                      high_order, two_stage, several_starts)
+                      methods, two_stage, several_starts)
 
 
 #: a module-level entry point: numba caches a function on disk by its name and source
@@ -281,23 +286,24 @@ def _entry_point(name: str, block):
     return namespace[name]
 
 
-#: the entry points of each system (a table row) by (system, tangent, high_order,
-#: two_stage, several_starts): with the tangent where its multipliers need it (elsewhere
-#: they are known in closed form), with DOP853 compiled in (its code made the first run of
-#: every example 1.02-1.06x longer), with auto's second stage (about a tenth of the blade
+#: the entry points of each system (a table row) by (system, tangent, methods, two_stage,
+#: several_starts): with the tangent where its multipliers need it (elsewhere they are known
+#: in closed form), with DOP853 or RK4 compiled in beside DOPRI5 (COMPILED: DOP853's code
+#: made the first run of every example 1.02-1.06x longer, RK4's the stability example's
+#: 4 CPU s of 64), with auto's second stage (about a tenth of the blade
 #: example's first run, whose exact flights never take it), and with several starts (the
 #: search for other starts' cycles is compiled only where a sweep asks for attractors)
 ENTRY_POINTS = {}
 for _system in SYSTEMS:
-    for _high in (False, True):
-        _args = (_system, CONTACTS[_system.model, _system.tool, _high],
+    for _methods in COMPILED:
+        _args = (_system, CONTACTS[_system.model, _system.tool, _methods],
                  PARAMETERS[_system.model], DATA[_system.tool])
         for _tangent in (False, True) if _system.tangent else (False,):
             for _two in (False, True):
                 for _several in (False, True):
-                    ENTRY_POINTS[_system, _tangent, _high, _two, _several] = _entry_point(
-                        entry_name(_system, _tangent, _high, _two, _several),
-                        build_block(*_args, stability=_tangent, high_order=_high,
+                    ENTRY_POINTS[_system, _tangent, _methods, _two, _several] = _entry_point(
+                        entry_name(_system, _tangent, _methods, _two, _several),
+                        build_block(*_args, stability=_tangent, methods=_methods,
                                     two_stage=_two, several_starts=_several))
 
 
@@ -306,8 +312,14 @@ def entry_point(system, method, tangent=False, two_stage=False, starts=1):
     code), with the tangent for the multipliers where asked for and the system needs it,
     with auto's second stage where asked for (settings.finer_by), and for ``starts``
     starting states per case (settings.starts)."""
-    return ENTRY_POINTS[system, tangent and system.tangent, method == METHOD_DOP853,
+    return ENTRY_POINTS[system, tangent and system.tangent, compiled_beside(method),
                         bool(two_stage), starts > 1]
+
+
+def compiled_beside(method):
+    """The methods an entry point solving by ``method`` has beside DOPRI5 (COMPILED): the
+    method itself where it is DOP853 or RK4, else none."""
+    return (method,) if method in OTHER_METHODS else ()
 
 
 def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1, finer_by=0.0,
@@ -315,7 +327,7 @@ def settings_for(system, method, rtol, atol, dt, max_impacts, starts=1, finer_by
     """The Settings of a solve on a system (a table row), by name."""
     return Settings(method=int(method), rtol=float(rtol), atol=float(atol), dt=float(dt),
                     max_steps=MAX_STEPS,
-                    horizon=float(CONTACTS[system.model, system.tool, False].horizon),
+                    horizon=float(CONTACTS[system.model, system.tool, ()].horizon),
                     max_impacts=int(max_impacts), starts=int(starts),
                     verdict_from=VERDICT_FROM, finer_by=float(finer_by),
                     accept=float(accept), margins=bool(margins))

@@ -13,6 +13,7 @@ model its ``Model`` (models.py) and its parameters from a case (systems.py).
 
 from collections import namedtuple
 
+from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_RK4
 from kernels.pendulum.models import MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR
 
 #: the models, by name: the codes of the spec's ``model``
@@ -48,13 +49,19 @@ SYSTEMS = tuple(PendulumSystem(*row) for row in (
 BY_CODES = {(MODELS[s.model], TOOLS[s.tool]): s for s in SYSTEMS}
 
 
-def entry_name(system: PendulumSystem, tangent: bool = False, high_order: bool = False,
+#: the names of the methods an entry point may have compiled in beside DOPRI5
+METHOD_NAMES = {METHOD_DOP853: "dop853", METHOD_RK4: "rk4"}
+
+
+def entry_name(system: PendulumSystem, tangent: bool = False, methods: tuple = (),
                two_stage: bool = False, several_starts: bool = False) -> str:
     """The name of a system's compiled entry point:
-    ``<model>_on_<tool>[_tangent][_dop853][_two_stage][_starts]`` (with the tangent; with
-    DOP853 compiled in; with auto's second stage; for several starts per case)."""
+    ``<model>_on_<tool>[_tangent][_dop853|_rk4][_two_stage][_starts]`` (with the tangent;
+    with DOP853 or RK4 compiled in beside DOPRI5, ``methods``; with auto's second stage;
+    for several starts per case)."""
     return (f"{system.model}_on_{system.tool}" + ("_tangent" if tangent else "")
-            + ("_dop853" if high_order else "") + ("_two_stage" if two_stage else "")
+            + "".join("_" + METHOD_NAMES[m] for m in methods)
+            + ("_two_stage" if two_stage else "")
             + ("_starts" if several_starts else ""))
 
 

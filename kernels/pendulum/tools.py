@@ -35,6 +35,7 @@ from kernels.impact.events import make_illinois
 from kernels.impact.flight import EXACT_REACH, Flight, make_flight
 from kernels.impact.impact_map import radical_inverse
 from kernels.impact.outcomes import FLIGHT_EVENT, NO_COST
+from kernels.impact.runge_kutta import OTHER_METHODS
 from kernels.impact.tangent import (DDPSI, DPHI, DPSI, DT, DW, Field,
                                     make_acceleration_differential, make_event_carry,
                                     make_variational)
@@ -136,10 +137,10 @@ def _gap_acceleration_change(model):
     return change
 
 
-def stop_flight(model, high_order=True):
+def stop_flight(model, methods=OTHER_METHODS):
     """The free flight of a pendulum below a stop fixed on the rotor at psi = data[0]:
     events 0, the stop (psi rising through it), and 1, escape (psi falling through -pi);
-    ``high_order``: DOP853 compiled in (System)."""
+    ``methods``: those compiled in beside DOPRI5 (System)."""
     psi_of, monitor = model.psi, model.monitor
 
     @njit(**INLINE_OPTIONS)
@@ -161,16 +162,16 @@ def stop_flight(model, high_order=True):
         return rate, accel
 
     return make_flight(System(model.rhs, model.scales, values, rates, (1, -1), on_event,
-                              start_gap, monitor, high_order=high_order))[0]
+                              start_gap, monitor, methods=methods))[0]
 
 
-def rotor_stop(model, high_order=True):
-    """The rotor stop composed with a model (see the module docstring); ``high_order``:
-    DOP853 compiled into its flights (System)."""
+def rotor_stop(model, methods=OTHER_METHODS):
+    """The rotor stop composed with a model (see the module docstring); ``methods``: those
+    compiled into its flights beside DOPRI5 (System)."""
     psi_of, dpsi_of = model.psi, model.dpsi
     critical_speed, accelerations = model.critical_speed, model.accelerations
     compose, rotor_angle, rotor_speed = model.compose, model.rotor_angle, model.rotor_speed
-    flight = stop_flight(model, high_order)
+    flight = stop_flight(model, methods)
 
     @njit(**INLINE_OPTIONS)
     def first(p, data, start):
@@ -313,7 +314,7 @@ def _kinematic_slide(model, free_gap_acceleration):
     return slide, _fixed_exit_tangent
 
 
-def _constrained_slide(model, gap_change, high_order):
+def _constrained_slide(model, gap_change, methods):
     """The slide of a rotor of finite inertia: a flight of the constrained system (psi,
     psi') on the face G = level, the rotor angle phi1 = level - beta(psi) and speed -h psi';
     psi'' keeps G'' = 0 with the contact force along J = (1, h), until the pressing
@@ -376,7 +377,7 @@ def _constrained_slide(model, gap_change, high_order):
 
     slide_flight, _ = make_flight(System(slide_rhs, relative_scales, slide_values,
                                          slide_rates, (-1, 1), slide_on_event, slide_start,
-                                         slide_monitor, high_order=high_order))
+                                         slide_monitor, methods=methods))
 
     @njit(**INNER_OPTIONS)
     def slide(t, y, data, p, settings, refine):
@@ -416,7 +417,8 @@ def _constrained_slide(model, gap_change, high_order):
         field = face_field(s, sp)
         return 0.0, 1.0, field[1], field[2]
 
-    flow_derivative = make_variational(Field(slide_rhs, face_jacobian, relative_scales), 2)
+    flow_derivative = make_variational(Field(slide_rhs, face_jacobian, relative_scales), 2,
+                                       methods)
 
     @njit(**INNER_OPTIONS)
     def slide_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
@@ -533,9 +535,9 @@ def _swing_coast(model):
     return coast
 
 
-def lab_window(model, high_order=True):
-    """The lab-fixed blade composed with a model (see the module docstring); ``high_order``:
-    DOP853 compiled into its flights (System)."""
+def lab_window(model, methods=OTHER_METHODS):
+    """The lab-fixed blade composed with a model (see the module docstring); ``methods``:
+    those compiled into its flights beside DOPRI5 (System)."""
     psi_of, dpsi_of, monitor = model.psi, model.dpsi, model.monitor
     compose, rotor_angle, rotor_speed = model.compose, model.rotor_angle, model.rotor_speed
     accelerations, response = model.accelerations, model.response
@@ -601,7 +603,7 @@ def lab_window(model, high_order=True):
     free_flight, _ = make_flight(System(model.rhs, model.scales, values, rates, (1, -1, 1),
                                         on_event, start_gap, monitor,
                                         _swing_coast(model) if model.driven else no_coast,
-                                        model.exact, model.exact_length, high_order,
+                                        model.exact, model.exact_length, methods,
                                         clear_time if speed_bound is not None else None))
     shift = model.shift
 
@@ -631,7 +633,7 @@ def lab_window(model, high_order=True):
     if model.driven:
         slide, slide_tangent = _kinematic_slide(model, free_gap_acceleration)
     else:
-        slide, slide_tangent = _constrained_slide(model, gap_change, high_order)
+        slide, slide_tangent = _constrained_slide(model, gap_change, methods)
 
     @njit(**INLINE_OPTIONS)
     def first(p, data, start):
