@@ -35,7 +35,7 @@ from kernels.extrema import peak_search
 from kernels.impact.events import make_bisection, make_locator
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW, Counters)
-from kernels.impact.runge_kutta import (METHOD_DOP853, METHOD_EXACT, METHOD_RK4,
+from kernels.impact.runge_kutta import (METHOD_DOP853, METHOD_EXACT, OTHER_METHODS,
                                         accepted_step_size,
                                         ballistic_cap, initial_step, make_stepper,
                                         low_order, rejected_step_size)
@@ -370,7 +370,7 @@ def make_peak(monitor, step, high_order=True):
     return track_peak, final_peak
 
 
-def make_timed_flight(rhs, scales, methods=(METHOD_RK4,)):
+def make_timed_flight(rhs, scales, methods=OTHER_METHODS):
     """``timed_flight(t0, y0, t1, p, settings) -> (reached, y)``: the state at a known time
     t1 from y0 at t0, by the flight loop's steps and step-size control, the last step cut
     to land on t1. For an integration whose end is known (the variational equations

@@ -55,7 +55,7 @@ from numba import njit
 
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact.tangent import MAX_SECTION_DIMENSION, NO_TRACKER, make_tracker
-from kernels.impact.runge_kutta import METHOD_RK4
+from kernels.impact.runge_kutta import OTHER_METHODS
 from kernels.impact.tuples import from_row
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_NONFINITE,
                                      FLIGHT_UNDERFLOW, NO_COST, SEQUENCE_CYCLE,
@@ -468,10 +468,11 @@ def with_cost(s, impacts, cost):
 
 
 def make_impact_map(c, jump_early, stability=False, known_cycles=True, second_stage=True,
-                    methods=(METHOD_RK4,)):
+                    methods=OTHER_METHODS):
     """The driver of a Contact (see the module docstring); with ``stability`` the steady
     cycle also carries the tangent of the section map (tangent.py) for its multipliers,
-    its flights with ``methods`` compiled in beside DOPRI5 (the Contact's own);
+    its flights with ``methods`` compiled in beside DOPRI5 (the Contact's; DOP853 never:
+    make_timed_flight);
     without ``known_cycles`` a sequence never looks for the cycles of other starts (a
     single start: their search is not compiled in); without ``second_stage`` the sequence
     from a state (``settle``) is called only by ``steady`` and inlined into it."""

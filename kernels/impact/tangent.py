@@ -38,7 +38,7 @@ from numba import njit
 
 from kernels import INNER_OPTIONS, INLINE_OPTIONS
 from kernels.impact.flight import make_timed_flight
-from kernels.impact.runge_kutta import METHOD_RK4
+from kernels.impact.runge_kutta import OTHER_METHODS
 from kernels.impact.tuples import relative_scales
 
 #: the rows of a perturbation's coordinates
@@ -59,7 +59,7 @@ def _generated(name: str, args: str, body: list[str], namespace: dict):
     return njit(**INLINE_OPTIONS)(namespace[name])
 
 
-def make_variational(model, n, methods=(METHOD_RK4,)):
+def make_variational(model, n, methods=OTHER_METHODS):
     """``flow_derivative(t0, y0, t1, p, settings) -> (reached, Y)``: the derivative Y (row-
     major n x n) of the flow of ``model`` (a Field: a model, or a slide's constrained
     system) from t0 to t1 at y0, by the variational equations on the augmented state."""
@@ -182,7 +182,7 @@ def make_acceleration_differential(model, n):
     return differential
 
 
-def make_tracker(c, n, methods=(METHOD_RK4,)):
+def make_tracker(c, n, methods=OTHER_METHODS):
     """The tangent's updates for a Contact (see the module docstring): the section's
     coordinates at the start, through a flight, through a contact, and the multiplier;
     ``methods``: those compiled into its flights beside DOPRI5 (make_timed_flight)."""
@@ -226,7 +226,7 @@ def make_tracker(c, n, methods=(METHOD_RK4,)):
                    multiplier)
 
 
-def make_tangent_flight(c, n, methods=(METHOD_RK4,)):
+def make_tangent_flight(c, n, methods=OTHER_METHODS):
     """The columns carried through a flight: the variational equations to the event and
     its time's shift (the saltation at a moving event); ``methods`` as make_tracker's."""
     model, gradient = c.model, c.event_gradient

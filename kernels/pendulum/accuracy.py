@@ -129,20 +129,20 @@ def solve_auto(solve, cases, tol, margins=False):
     counters = [ROW.steps, ROW.rejected, ROW.events]
     spent = np.zeros((cases.shape[0], len(counters)))
     for round_ in range(AUTO_ROUNDS):
-        # a case whose estimate misses is solved again, unless this round is its last: its
-        # other starts are then flown only in the round it ends in (Settings.accept)
+        # a case whose estimate misses accept is solved again; in the last round accept is
+        # inf. The kernel reads the same accept (Settings.accept): it leaves what the next
+        # round flies anyway to that round
         last = round_ == AUTO_ROUNDS - 1 or rtol / AUTO_REFINE ** 2 < AUTO_FINEST
+        accept = math.inf if last else AUTO_ACCEPT * tol
         fine, coarse = solve(cases[pending], auto_method(tol), rtol, rtol * AUTO_ATOL_PER_RTOL,
-                             0.0, AUTO_REFINE, math.inf if last else AUTO_ACCEPT * tol,
-                             margins)
+                             0.0, AUTO_REFINE, accept, margins)
         spent[pending] += fine[:, counters]
         fine[:, ROW.error] = estimated_error(coarse, fine, margins)
         rows[pending] = fine
-        rtol /= AUTO_REFINE
-        more = (fine[:, ROW.error] > AUTO_ACCEPT * tol) & (rtol / AUTO_REFINE >= AUTO_FINEST)
-        pending = pending[more]
+        pending = pending[fine[:, ROW.error] > accept]
         if not pending.size:
             break
+        rtol /= AUTO_REFINE
     rows[:, counters] = spent
     return rows
 

@@ -87,7 +87,7 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
     in."""
     high_order = METHOD_DOP853 in methods
     driver = make_impact_map(contact, jump_early, stability, several_starts, two_stage,
-                             tuple(m for m in methods if m != METHOD_DOP853))
+                             methods)
     steady, settle = driver.steady, driver.settle
 
     # one stage: a call of steady, inlined (one function fewer to compile)
@@ -245,11 +245,10 @@ def _same_attractor(seen, a, b, n_keys):
 PARAMETERS = {"paper": paper_parameters, "rigid": rigid_parameters,
                "rotor": rotor_parameters}
 DATA = {"rotor_stop": rotor_stop_data, "lab_window": lab_window_data}
-#: each system's contact (the core's description of it), by the table's names, without and
-#: with DOP853 in its flights
 #: the methods compiled into a contact's flights beside DOPRI5 (and the exact flow), one
 #: variant each: none, DOP853 (tight tol), RK4 (asked for)
 COMPILED = ((), (METHOD_DOP853,), (METHOD_RK4,))
+#: each system's contact (the core's description of it), by the table's names and COMPILED
 CONTACTS = {(s.model, s.tool, methods): getattr(tools, s.tool)(
     getattr(models, s.model.upper()), methods) for s in SYSTEMS for methods in COMPILED}
 #: a flight's step budget
