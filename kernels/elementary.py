@@ -7,17 +7,14 @@ approximation on |x| <= tan(pi/8) (Moshier's Cephes scheme), accurate to ~2 ulp
 (tests/test_elementary.py checks it against math.atan2 over random and special inputs).
 ``sincos_quadrant`` gives sin and cos of one argument in [0, pi/2] from one reduction
 (the half period's quadrature needs both at every node), within an ulp of libm
-(tests/test_elementary.py). ``sincos_lane`` gives both for any finite argument without a
-call or a branch, so that a loop of them over lanes vectorises (the rotor model's step,
-kernels/impact/lanes.py), within 2 ulp of libm.
+(tests/test_elementary.py).
 """
 
 import math
 
-import numpy as np
 from numba import njit
 
-from kernels import INLINE_OPTIONS, KERNEL_OPTIONS
+from kernels import KERNEL_OPTIONS
 
 _P0, _P1, _P2 = -8.750608600031904122785e-01, -1.615753718733365076637e01, -7.500855792314704667340e01
 _P3, _P4 = -1.228866684490136173410e02, -6.485021904942025371773e01
@@ -77,15 +74,13 @@ _COS = (-1.13585365213876817300e-11, 2.08757008419747316778e-9, -2.7557314179296
 _PIO2_HI, _PIO2_LO = 1.5707963267948966, 6.123233995736766e-17
 
 
-@njit(**INLINE_OPTIONS)
+@njit(**KERNEL_OPTIONS)
 def _sin_cos_reduced(x):
-    """sin x and cos x for |x| <= pi/4: Cephes' polynomials, by Horner's rule written
-    out (a loop over the coefficients kept a loop over lanes from vectorising)."""
     z = x * x
-    s = (((((_SIN[0] * z + _SIN[1]) * z + _SIN[2]) * z + _SIN[3]) * z + _SIN[4]) * z
-         + _SIN[5])
-    c = (((((_COS[0] * z + _COS[1]) * z + _COS[2]) * z + _COS[3]) * z + _COS[4]) * z
-         + _COS[5])
+    s = c = 0.0
+    for j in range(6):
+        s = s * z + _SIN[j]
+        c = c * z + _COS[j]
     return x + x * z * s, 1.0 - 0.5 * z + z * z * c
 
 
@@ -99,58 +94,6 @@ def sincos_quadrant(x):
         s, c = _sin_cos_reduced(y)
         return c, s
     return _sin_cos_reduced(x)
-
-
-# pi/2 in three parts for Cody and Waite's reduction: the first two with 27 significant
-# bits, so that n times each is exact for |n| < 2^26 (Cephes' DP1..DP3, doubled)
-_PIO2_A, _PIO2_B, _PIO2_C = 1.5707962512969970703125, 7.549789415861596353352e-8, \
-    5.390302858158119052953e-15
-_TWO_OVER_PI = 0.6366197723675814
-
-
-@njit(**INLINE_OPTIONS)
-def sincos_lane(x):
-    """(sin x, cos x) for finite x (|x| < 1e7; NaN for NaN or inf) without a call or a
-    branch: x = n pi/2 + r by Cody and Waite's reduction in three parts, |r| <= pi/4,
-    sin r and cos r by _sin_cos_reduced, and the pair rotated by n quarter turns with
-    selects. Odd and even exactly (reduced from |x|). Within 2 ulp of libm
-    (tests/test_elementary.py): a loop of it over lanes is vectorised by LLVM, which
-    libm's sin and cos are not (kernels/impact/lanes.py)."""
-    a = abs(x)
-    n = np.floor(a * _TWO_OVER_PI + 0.5)  # a float (math.floor's is an int)
-    r = ((a - n * _PIO2_A) - n * _PIO2_B) - n * _PIO2_C
-    sr, cr = _sin_cos_reduced(r)
-    quarter = n - 4.0 * np.floor(0.25 * n)  # n mod 4
-    odd = (quarter == 1.0) | (quarter == 3.0)
-    s = cr if odd else sr
-    c = sr if odd else cr
-    s = -s if quarter >= 2.0 else s
-    c = -c if (quarter == 1.0) | (quarter == 2.0) else c
-    return (-s if x < 0.0 else s), c
-
-
-@njit(**INLINE_OPTIONS)
-def atan2_lane(y, x):
-    """atan2(y, x) for finite y, x without a call or a branch, for a loop over lanes
-    (kernels/impact/lanes.py: the lab blade's gap, for a bound on it): atan_fast's
-    reduction and rational approximation on |y|/|x| or its inverse (the smaller of the
-    two, so the argument is at most 1), the quadrant by selects. Within a few ulp of
-    libm's (tests/test_elementary.py); atan2(0, 0) = 0."""
-    ay, ax = abs(y), abs(x)
-    swap = ay > ax
-    num = ax if swap else ay
-    den = ay if swap else ax
-    z = num / den if den > 0.0 else 0.0  # in [0, 1]
-    mid = z > 0.4142135623730950  # tan(pi/8): reduce by pi/4
-    w = (z - 1.0) / (z + 1.0) if mid else z
-    w2 = w * w
-    p = (((_P0 * w2 + _P1) * w2 + _P2) * w2 + _P3) * w2 + _P4
-    q = ((((w2 + _Q0) * w2 + _Q1) * w2 + _Q2) * w2 + _Q3) * w2 + _Q4
-    a = w + w * w2 * p / q
-    a = (0.25 * math.pi + (0.5 * _MOREBITS + a)) if mid else a
-    a = (0.5 * math.pi - a) if swap else a  # atan(1/z) = pi/2 - atan(z)
-    a = (math.pi - a) if x < 0.0 else a
-    return -a if y < 0.0 else a
 
 
 #: the Maclaurin series of sn, cn, dn serve up to this |u| sqrt(max(1, m)): the first term

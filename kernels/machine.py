@@ -456,7 +456,7 @@ def revolution_scales(y0, y1, rtol, atol):
 REVOLUTION = System(revolution_rhs, revolution_scales, revolution_values, revolution_rates,
                     (1, -1, -1), revolution_on_event, revolution_start,
                     revolution_monitor)
-fly_revolution = make_flight(REVOLUTION).fly
+fly_revolution, _ = make_flight(REVOLUTION)
 timed_revolution = make_timed_flight(revolution_rhs, revolution_scales)
 
 

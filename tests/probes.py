@@ -38,7 +38,7 @@ def settings(method="dopri5", rtol=1e-12, atol=1e-14, dt=0.002, max_steps=10**6,
 @cache
 def flight(model: str, tool: str):
     """flight(t, y, p, data, settings, refine) -> the core's Flight record."""
-    fly = contact(model, tool).flight.fly
+    fly = contact(model, tool).flight
 
     @njit
     def probe(t, y, p, data, s, refine):
@@ -88,7 +88,7 @@ def chatter(model: str, tool: str):
     by the tool's ``settle`` (the ballistic tail): (accumulated, impacts, t, y, flight
     outcome, flight event). (The impact map's contact goes on from there into a slide.)"""
     c = contact(model, tool)
-    fly, restitute = c.flight.fly, make_impact_map(c, False).restitute
+    fly, restitute = c.flight, make_impact_map(c, False).restitute
     normal_speed, normal_acceleration, settle = (c.normal_speed, c.normal_acceleration,
                                                  c.settle)
 

@@ -138,7 +138,7 @@ def mirrored_stop(model):
         return -rate, -accel
 
     flight = make_flight(System(model.rhs, model.scales, values, rates, (1, -1), on_event,
-                                start_gap, monitor))
+                                start_gap, monitor))[0]
 
     @njit(**INLINE_OPTIONS)
     def first(p, data, start):

@@ -64,7 +64,7 @@ def line_monitor(t, y, f):
 
 LINE = System(line_rhs, relative_scales, line_values, line_rates, (1, -1), terminal,
               line_start, line_monitor)
-_line_flight = make_flight(LINE).fly
+_line_flight, _ = make_flight(LINE)
 fixed_steps = fixed_steps_of(line_rhs, relative_scales)
 
 
@@ -98,9 +98,9 @@ def blowup_monitor(t, y, f):
     return y[0], f[0], 0.0
 
 
-_blowup_flight = make_flight(System(blowup_rhs, relative_scales, blowup_values,
+_blowup_flight, _ = make_flight(System(blowup_rhs, relative_scales, blowup_values,
                                        blowup_rates, (1,), terminal, blowup_start,
-                                       blowup_monitor)).fly
+                                       blowup_monitor))
 
 
 @njit

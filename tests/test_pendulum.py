@@ -4,7 +4,6 @@ integrators, oracles P-O1..P-O13, the separatrix (H1, H2), the affine map (H13).
 import math
 
 import numpy as np
-from numba import njit
 import pytest
 from scipy.special import ellipk as scipy_ellipk
 
@@ -293,17 +292,11 @@ def test_regime_flags_decode_by_name_in_the_atlas(tmp_path):
     assert [status[codes.index(v)] for v in ds["status"].values] == ["ok", "escape"]
 
 
-@njit
-def mass_matrix(psi, k, xi, j1):
-    """The rotor model's mass matrix (inlined into its callers in the kernels)."""
-    return pm.mass_matrix(psi, k, xi, j1)
-
-
 def rotor_energy_momentum(y, p):
     """Kinetic energy and angular momentum of the rotor model (P8): a free rotor conserves
     both."""
     k, xi, j1 = p[0], p[1], p[2]
-    m11, m12, m22 = mass_matrix(y[2], k, xi, j1)
+    m11, m12, m22 = pm.mass_matrix(y[2], k, xi, j1)
     return pm.kinetic_energy(y, p), m11 * y[1] + m12 * y[3]
 
 
@@ -343,7 +336,7 @@ def test_P_O11_generalised_impact():
     p = (k, xi, j1, 0.0, 1.0)
     before = (0.0, w, 0.0, dpsi)
     after = hit(j1)
-    m11, m12, m22 = mass_matrix(0.0, k, xi, j1)
+    m11, m12, m22 = pm.mass_matrix(0.0, k, xi, j1)
     jac = np.array([1 + k, 1.0])
     m_inv_jt = np.linalg.solve([[m11, m12], [m12, m22]], jac)
     v_n = jac @ [w, dpsi]

@@ -68,21 +68,11 @@ def no_coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo, closed_fo
 #: is asked for, systems.make_block); ``clear_time(y, values_now, data, p)``: a time within
 #: which no event can fire from the state y, whose event values are ``values_now`` (a lower
 #: bound, from bounds on the events' rates), up to which an exact flight that refines
-#: nothing steps past exact_length; ``lane_events(t, y, f, data) -> (values, rates)``: the
-#: events' values and rates within LANE_EVENT_SLACK of event_values' and event_rates' (each
-#: relative to 1 + its size), with no call or branch, so that a step's event test is taken
-#: in lanes (kernels/impact/lanes.py; without it every step of a lane is searched);
-#: ``lane_rhs``: rhs with everything it calls inlined, for the steps in lanes (a call stops
-#: their loop vectorising), where rhs calls a function it would cost numba's compile too
-#: much to inline into every stepper (None: rhs)
+#: nothing steps past exact_length
 System = namedtuple("System", ["rhs", "scales", "event_values", "event_rates", "directions",
                                "on_event", "start_gap", "monitor", "coast", "exact",
-                               "exact_length", "methods", "clear_time", "lane_events",
-                               "lane_rhs"],
-                    defaults=(no_coast, None, None, OTHER_METHODS, None, None, None))
-#: how far a System's lane_events may be from its events' values and rates, relative to 1
-#: plus their size: a bound far above their few ulp, far below any gap the search resolves
-LANE_EVENT_SLACK = 1e-12
+                               "exact_length", "methods", "clear_time"],
+                    defaults=(no_coast, None, None, OTHER_METHODS, None))
 
 #: what happens at a contact, for the impact map (impact_map.py). ``model``: the flying
 #: body's functions the map needs (namedtuple fields response(y, J_phi, J_psi, p) = M^-1 J^T

@@ -33,14 +33,13 @@ from numba import njit
 from kernels import INLINE_OPTIONS, INNER_OPTIONS
 from kernels.extrema import peak_search
 from kernels.impact.events import make_bisection, make_locator
-from kernels.impact import LANE_EVENT_SLACK
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW, Counters)
 from kernels.impact.runge_kutta import (METHOD_DOP853, METHOD_EXACT, OTHER_METHODS,
                                         accepted_step_size,
                                         ballistic_cap, initial_step, make_stepper,
                                         low_order, rejected_step_size)
-from kernels.impact.tuples import hermite, hermite_slope, replacer
+from kernels.impact.tuples import hermite, hermite_slope
 
 POLISH_ITERATIONS = 4
 PEAK_SAMPLES = 3  # interior samples of |acceleration| per step, where the peak matters
@@ -60,32 +59,6 @@ EXACT_REACH = 1.0
 #: acceleration of the monitored angle, and what it cost (outcomes.Counters)
 Flight = namedtuple("Flight", ["outcome", "event", "t", "y", "f", "data", "amplitude",
                                "peak", "cost"])
-#: a flight under way, between two of its steps (``Flier.after`` takes it on by one): its
-#: start time, the time, state, derivative, next step size and system data now, the
-#: monitored angle there, its counters, amplitude and peak so far, with ``refine`` the
-#: step around the largest |acceleration| (make_peak's ``best``) and its value, the step
-#: controller's memory (a rejection just before, the last error), the monitored angle's
-#: zero crossings (their count, the last one's time and the step that held it) and the
-#: coast's memo, the events' values and rates now (``start``; where ``start_known`` is
-#: False, not kept since a step no event could end, ``after``'s ``clear``), whether turning
-#: points and peaks are refined, and ``origin``: the time a tool measures the flight from
-#: (its last contact's face on the lab blade, tools.lab_window; 0 elsewhere)
-FlightState = namedtuple("FlightState", [
-    "t0", "t", "y", "f", "h", "data", "angle", "steps", "rejected", "events", "amplitude",
-    "peak", "best", "best_value", "after_reject", "err_prev", "crossings", "t_cross",
-    "h_cross", "memo", "start", "start_known", "refine", "origin"])
-flight_with = replacer(FlightState)
-#: a system's flight in parts: ``fly(t, y, p, data, settings, refine) -> Flight`` the whole
-#: flight; ``begin`` (same arguments) -> (FlightState, ended, Flight) and ``after(state, y1,
-#: f1, err, p, settings, clear) -> (FlightState, ended, Flight)``, the flight before its
-#: first step and after each step ``step(state.h)`` from it (``clear``: no event can fire
-#: in that step, so it is not searched), for a driver that holds many flights at once and
-#: takes their steps together (kernels/impact/lanes.py); ``step`` the system's Runge-Kutta
-#: step, and ``lane_step`` the same inlined into its caller, so that a loop of steps over
-#: several flights is vectorised (the same operations: the same bits); ``lane_clear(t, h,
-#: y, f, y1, f1, data)``: whether no event can fire in a step, from the System's
-#: lane_events (False without them), for a loop over lanes too
-Flier = namedtuple("Flier", ["fly", "begin", "after", "step", "lane_step", "lane_clear"])
 
 
 @njit(**INLINE_OPTIONS)
@@ -98,195 +71,104 @@ def _never_clear(y, values_now, data, p):
     return 0.0
 
 
-@njit(**INLINE_OPTIONS)
-def _flight_of(st, outcome, event):
-    """The Flight of a flight in the state ``st``, ended with ``outcome`` (or not yet)."""
-    return Flight(outcome, event, st.t, st.y, st.f, st.data, st.amplitude, st.peak,
-                  Counters(st.steps, st.rejected, st.events))
-
-
-@njit(**INLINE_OPTIONS)
-def going_on(st, settings):
-    """(st, ended, Flight): the flight in state ``st`` ends before its next step where its
-    step budget is spent or it has run past its horizon."""
-    if not st.steps + st.rejected < settings.max_steps:
-        return st, True, _flight_of(st, FLIGHT_MAX_STEPS, -1)
-    if st.t - st.t0 > settings.horizon:
-        return st, True, _flight_of(st, FLIGHT_HORIZON, -1)
-    return st, False, _flight_of(st, FLIGHT_EVENT, -1)
-
-
 def make_flight(system):
-    """The flight loop of a system (see the module docstring), as a ``Flier``: the whole
-    flight and its parts."""
+    """The flight loop of a system (see the module docstring): ``(flight, step)``."""
     rhs, monitor, on_event = system.rhs, system.monitor, system.on_event
     step = make_stepper(rhs, system.scales, system.exact, system.methods)
-    lane_step = make_stepper(rhs if system.lane_rhs is None else system.lane_rhs,
-                             system.scales, system.exact, system.methods, inline=True)
     locate = make_locator(system.event_values, system.event_rates, system.directions, step)
     polish = make_polish(system.event_values, system.event_rates, step)
     turning_angle = make_turning_angle(monitor, step)
     track_peak, final_peak = make_peak(monitor, step, METHOD_DOP853 in system.methods)
-    start_step, next_step, events_at, coast_on, reads_values = make_step_control(system)
+    start_step, next_step, events_at, coast_on = make_step_control(system)
 
-    # begin and after are inlined into their callers (the whole flight, a block's lanes):
-    # called, they passed the flight's state record through memory at every step (1.5x
-    # the step's time)
-    @njit(**INLINE_OPTIONS)
-    def begin(t0, y0, p, data, settings, refine):
+    @njit(**INNER_OPTIONS)
+    def flight(t0, y0, p, data, settings, refine):
+        method, rtol, atol = settings.method, settings.rtol, settings.atol
+        slack = max(100.0 * atol, 1e-10)  # how far beyond a level a step may start (events.py)
         t, y, f = t0, y0, rhs(y0, p)
         angle, rate, accel = monitor(t, y, f)
         h = start_step(t, y, f, data, p, settings, rate)
+        steps = rejected = events = 0
+        amplitude, peak = abs(angle), abs(accel)
         # with refine, where |accel| is largest: the step, its end state, and a bracket
         # (from the step's start) around its largest sample, interior or at the end
-        best = (y, f, y, f, 0.0, t, 0.0, 0.0)
+        best, best_value = (y, f, y, f, 0.0, t, 0.0, 0.0), abs(accel)
+        after_reject, err_prev = bool(False), 1.0
+        # zero crossings of the angle, the last one's time and the step that held it (the
+        # bound of that time's error), the coast's memo
+        crossings, t_cross, h_cross, memo = 0, t0, 0.0, (math.nan, math.nan)
         # the events' values and rates at the step's start: the last step's end, or anew
         # where the flight moved otherwise (an event passed, a coast)
-        st = FlightState(t0=t0, t=t, y=y, f=f, h=h, data=data, angle=angle, steps=int(0),
-                         rejected=int(0), events=int(0), amplitude=abs(angle),
-                         peak=abs(accel), best=best, best_value=abs(accel),
-                         after_reject=bool(False), err_prev=1.0, crossings=int(0),
-                         t_cross=t0, h_cross=0.0, memo=(math.nan, math.nan),
-                         start=events_at(t, y, f, data), start_known=bool(True),
-                         refine=refine, origin=0.0)
-        return going_on(st, settings)
-
-    @njit(**INLINE_OPTIONS)
-    def after(st, y1, f1, err, p, settings, clear):
-        method, rtol, atol = settings.method, settings.rtol, settings.atol
-        t, h, y, f, data, refine = st.t, st.h, st.y, st.f, st.data, st.refine
-        steps, rejected, events = st.steps, st.rejected, st.events
-        amplitude, peak, best, best_value = st.amplitude, st.peak, st.best, st.best_value
-        if not err <= 1.0:  # NaN too: a step into a blow-up is rejected, not taken
-            h, underflow = rejected_step_size(method, h, err, st.err_prev, t)
-            st = flight_with(st, h=h, rejected=rejected + 1, after_reject=bool(True))
-            if underflow:
-                return st, True, _flight_of(st, FLIGHT_UNDERFLOW, -1)
-            return going_on(st, settings)
-        steps += 1
-        e, s, end, known = -1, -1.0, st.start, bool(False)
-        if not clear:
-            slack = max(100.0 * atol, 1e-10)  # how far beyond a level a step may start
-            # (events.py); the values at the step's start as the step before left them
-            # (its end), or, where that step was not searched, anew: the same values
-            start = st.start if st.start_known else events_at(t, y, f, data)
+        start = events_at(t, y, f, data)
+        while steps + rejected < settings.max_steps:
+            if t - t0 > settings.horizon:
+                return Flight(FLIGHT_HORIZON, -1, t, y, f, data, amplitude, peak,
+                              Counters(steps, rejected, events))
+            y1, f1, err = step(method, y, f, h, p, rtol, atol)
+            if not err <= 1.0:  # NaN too: a step into a blow-up is rejected, not taken
+                rejected += 1
+                after_reject = bool(True)
+                h, underflow = rejected_step_size(method, h, err, err_prev, t)
+                if underflow:
+                    return Flight(FLIGHT_UNDERFLOW, -1, t, y, f, data, amplitude, peak,
+                                  Counters(steps, rejected, events))
+                continue
+            steps += 1
             e, s, end = locate((t, h, y, f, y1, f1), (data, p, method, slack), start)
-            known = True
-        if e >= 0:
-            s, ys, fs = polish(e, (t, h, y, f), s, p, data, settings)
-            events += 1
-            terminal, new_data = on_event(e, t + s, ys, fs, data, p)
-            angle_e, rate_e, accel_e = monitor(t + s, ys, fs)
-            amplitude, peak = max(amplitude, abs(angle_e)), max(peak, abs(accel_e))
-            if terminal:
-                if refine:  # the largest |accel|, refined by golden section
-                    best, best_value = track_peak(best, best_value, t, h, y, f, y1, f1,
-                                                  s, -1.0, p, method)
-                    peak = final_peak(best, peak, t + s, p, method, rtol)
-                st = flight_with(st, t=t + s, y=ys, f=fs, data=new_data, steps=steps,
-                                 events=events, amplitude=amplitude, peak=peak)
-                return st, True, _flight_of(st, FLIGHT_EVENT, e)
-            # passed (the striker goes by the tool): on from the event, state as it is
-            st = flight_with(st, t=t + s, y=ys, f=fs, data=new_data, angle=angle_e,
-                             steps=steps, events=events, amplitude=amplitude, peak=peak,
-                             start=events_at(t + s, ys, fs, new_data),
-                             start_known=bool(True))
-            return going_on(st, settings)
-        angle1, rate1, accel1 = monitor(t + h, y1, f1)
-        if not (math.isfinite(angle1) and math.isfinite(rate1)):  # RK4 has no error
-            st = flight_with(st, steps=steps)
-            return st, True, _flight_of(st, FLIGHT_NONFINITE, -1)
-        amplitude, peak = max(amplitude, abs(angle1)), max(peak, abs(accel1))
-        if refine and (monitor(t, y, f)[1] < 0.0) != (rate1 < 0.0):
-            amplitude = max(amplitude, abs(turning_angle(t, h, y, f, y1, f1, p, settings)))
-        if refine:
-            best, best_value = track_peak(best, best_value, t, h, y, f, y1, f1, h,
-                                          abs(accel1), p, method)
-        skip, crossings, t_cross, h_cross, y1, f1, data, memo, coasted = coast_on(
-            st.angle, angle1, st.crossings, st.t_cross, st.h_cross, t, h, y1, f1, data, p,
-            st.t0 + settings.horizon, st.memo, method == METHOD_EXACT)
-        steps += coasted
-        t, y, f, angle = t + skip + h, y1, f1, angle1
-        if skip != 0.0:
-            angle = monitor(t, y, f)[0]
-            start, known = events_at(t, y, f, data), bool(True)
-        elif known or not reads_values(settings, refine):
-            start = end  # (stale where not known: read by the next search only)
-        else:
-            start, known = events_at(t, y, f, data), bool(True)
-        h, err_prev = next_step(y, start[0], data, p, settings, refine, h, err,
-                                st.after_reject, st.err_prev)
-        st = FlightState(t0=st.t0, t=t, y=y, f=f, h=h, data=data, angle=angle, steps=steps,
-                         rejected=rejected, events=events, amplitude=amplitude, peak=peak,
-                         best=best, best_value=best_value, after_reject=bool(False),
-                         err_prev=err_prev, crossings=crossings, t_cross=t_cross,
-                         h_cross=h_cross, memo=memo, start=start, start_known=known,
-                         refine=refine, origin=st.origin)
-        return going_on(st, settings)
-
-    return Flier(fly=make_fly(begin, after, step), begin=begin, after=after, step=step,
-                 lane_step=lane_step, lane_clear=make_lane_clear(system))
-
-
-def make_lane_clear(system):
-    """``lane_clear(t, h, y, f, y1, f1, data)``: no event of the system can fire in the step
-    from (t, y, f) to (t + h, y1, f1), by the chord bound of events.py on its lane_events,
-    widened by their slack (LANE_EVENT_SLACK) so that it never clears a step the search
-    would look into: the search's own bound passes every step this one does. False for a
-    system without lane_events."""
-    lane_events, directions = system.lane_events, system.directions
-    n_events = len(directions)
-
-    @njit(**INLINE_OPTIONS)
-    def never(t, h, y, f, y1, f1, data):
-        return False
-
-    if lane_events is None:
-        return never
-
-    @njit(**INLINE_OPTIONS)
-    def lane_clear(t, h, y, f, y1, f1, data):
-        v0, r0 = lane_events(t, y, f, data)
-        v1, r1 = lane_events(t + h, y1, f1, data)
-        clear = True
-        for e in range(n_events):
-            g0, g1 = v0[e], v1[e]
-            reach = 4.0 / 27.0 * abs(h) * (abs(r0[e]) + abs(r1[e]))
-            margin = LANE_EVENT_SLACK * ((1.0 + abs(g0)) + (1.0 + abs(g1)) + reach
-                                         + abs(h) * (2.0 + abs(r0[e]) + abs(r1[e])))
-            if directions[e] > 0:
-                clear = clear & (max(g0, g1) + reach + margin < 0.0)
+            if e >= 0:
+                s, ys, fs = polish(e, (t, h, y, f), s, p, data, settings)
+                events += 1
+                terminal, new_data = on_event(e, t + s, ys, fs, data, p)
+                angle_e, rate_e, accel_e = monitor(t + s, ys, fs)
+                amplitude, peak = max(amplitude, abs(angle_e)), max(peak, abs(accel_e))
+                if terminal:
+                    if refine:  # the largest |accel|, refined by golden section
+                        best, best_value = track_peak(best, best_value, t, h, y, f, y1, f1,
+                                                      s, -1.0, p, method)
+                        peak = final_peak(best, peak, t + s, p, method, rtol)
+                    return Flight(FLIGHT_EVENT, e, t + s, ys, fs, new_data, amplitude, peak,
+                                  Counters(steps, rejected, events))
+                # passed (the striker goes by the tool): on from the event, state as it is
+                t, y, f, data, angle = t + s, ys, fs, new_data, angle_e
+                start = events_at(t, y, f, data)
+                continue
+            angle1, rate1, accel1 = monitor(t + h, y1, f1)
+            if not (math.isfinite(angle1) and math.isfinite(rate1)):  # RK4 has no error
+                return Flight(FLIGHT_NONFINITE, -1, t, y, f, data, amplitude, peak,
+                              Counters(steps, rejected, events))
+            amplitude, peak = max(amplitude, abs(angle1)), max(peak, abs(accel1))
+            if refine and (monitor(t, y, f)[1] < 0.0) != (rate1 < 0.0):
+                amplitude = max(amplitude, abs(turning_angle(t, h, y, f, y1, f1, p,
+                                                             settings)))
+            if refine:
+                best, best_value = track_peak(best, best_value, t, h, y, f, y1, f1, h,
+                                              abs(accel1), p, method)
+            skip, crossings, t_cross, h_cross, y1, f1, data, memo, coasted = coast_on(
+                angle, angle1, crossings, t_cross, h_cross, t, h, y1, f1, data, p,
+                t0 + settings.horizon, memo, method == METHOD_EXACT)
+            steps += coasted
+            t, y, f, angle = t + skip + h, y1, f1, angle1
+            if skip != 0.0:
+                angle = monitor(t, y, f)[0]
+                start = events_at(t, y, f, data)
             else:
-                clear = clear & (min(g0, g1) - reach - margin > 0.0)
-        return clear
+                start = end
+            h, err_prev = next_step(y, start[0], data, p, settings, refine, h, err,
+                                    after_reject, err_prev)
+            after_reject = bool(False)
+        return Flight(FLIGHT_MAX_STEPS, -1, t, y, f, data, amplitude, peak,
+                      Counters(steps, rejected, events))
 
-    return lane_clear
-
-
-def make_fly(begin, after, step):
-    """The whole flight from its parts (``Flier``): ``fly(t, y, p, data, settings, refine)
-    -> Flight``, each step taken from the state ``after`` left."""
-
-    @njit(**INNER_OPTIONS)
-    def fly(t0, y0, p, data, settings, refine):
-        st, ended, fl = begin(t0, y0, p, data, settings, refine)
-        while not ended:
-            y1, f1, err = step(settings.method, st.y, st.f, st.h, p, settings.rtol,
-                               settings.atol)
-            st, ended, fl = after(st, y1, f1, err, p, settings, bool(False))
-        return fl
-
-    return fly
+    return flight, step
 
 
 def make_step_control(system):
     """The flight loop's step sizes and its moves other than a step: ``start_step`` (the
     first: the exact flow's length or the method's initial step, capped by the ballistic
     return time of the gap the flight leaves, H4), ``next_step`` (after an accepted one),
-    ``events_at`` (the events' values and rates at a point), ``coast_on`` (past the
+    ``events_at`` (the events' values and rates at a point) and ``coast_on`` (past the
     time no event can end, once the monitored angle has crossed zero twice, the system's
-    ``coast``) and ``reads_values(settings, refine)``, whether next_step reads the events'
-    values at the step's end."""
+    ``coast``)."""
     values, rates, start_gap, coast = (system.event_values, system.event_rates,
                                        system.start_gap, system.coast)
     has_exact = system.exact is not None
@@ -340,13 +222,7 @@ def make_step_control(system):
             closed_form)
         return skip, crossings, t_cross, h_cross, y1, f1, data, memo, steps
 
-    @njit(**INLINE_OPTIONS)
-    def reads_values(settings, refine):
-        """Whether next_step reads the events' values at the step's end: the exact flow's
-        clear time does (a step the lanes cleared has not computed them)."""
-        return has_clear and settings.method == METHOD_EXACT and not refine
-
-    return start_step, next_step, events_at, coast_on, reads_values
+    return start_step, next_step, events_at, coast_on
 
 
 def make_polish(values, rates, step):

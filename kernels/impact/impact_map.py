@@ -1,14 +1,11 @@
 """The impact map: contacts and flights from the start of a sequence to its steady cycle.
 
 ``make_impact_map(contact, jump_early)`` specialises the driver to a ``Contact``
-(kernels/impact/__init__.py) and returns a ``Driver``: one section, one contact, Newton's
-law, and a sequence in parts (``SequenceParts``: the transient's ``begin``, ``top`` and
-``bottom`` around each section, the section's ``section_begin``, ``section_contact`` and
-``section_flown`` around each flight, and ``settle``, its steady cycle after the
-transient), so that a driver can hold many sequences at once and fly their flights
-together (kernels/impact/lanes.py, kernels/pendulum/systems.make_block); one factory
-each: the law, a contact, a section, the transient and its accelerators, the refined
-cycle, the steady state:
+(kernels/impact/__init__.py) and returns a ``Driver`` whose ``steady(p, data, r, settings,
+repeat_tol, log, start, known) -> (Steady, t, y, data)`` runs a sequence, and ``settle``
+the same from a given state (auto's second stage goes on from the first one's cycle); one
+factory each: the law, a contact, a section, the transient and its accelerators, the
+refined cycle, the whole sequence:
 
 1. a contact: Newton's law on the normal speed along the contact Jacobian, through the
    model's impulse response; a bounce that would leave slower than SPEED_EPS ends a chatter
@@ -59,7 +56,7 @@ from numba import njit
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact.tangent import MAX_SECTION_DIMENSION, NO_TRACKER, make_tracker
 from kernels.impact.runge_kutta import OTHER_METHODS
-from kernels.impact.tuples import from_row, replacer
+from kernels.impact.tuples import from_row
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_NONFINITE,
                                      FLIGHT_UNDERFLOW, NO_COST, SEQUENCE_CYCLE,
                                      SEQUENCE_DEGENERATE, SEQUENCE_ESCAPE, SEQUENCE_MAX_STEPS,
@@ -91,9 +88,9 @@ Steady = namedtuple("Steady", ["outcome", "period", "chatter", "amplitude", "fli
 #: leading multiplier (modulus, argument; NaN unless the tangent was carried)
 Margins = namedtuple("Margins", ["speed_min", "speed_max", "edge", "modulus", "angle"])
 NO_MARGINS = Margins(math.nan, math.nan, math.nan, math.nan, math.nan)
-#: the driver's functions: one section, one contact, Newton's law, and the sequence in parts
-#: (SequenceParts)
-Driver = namedtuple("Driver", ["section", "contact", "restitute", "sequence"])
+#: the driver's functions: the whole sequence from a start and from a state, one section,
+#: one contact, Newton's law
+Driver = namedtuple("Driver", ["steady", "settle", "section", "contact", "restitute"])
 #: the refined steady cycle (``cycle``): its outcome, chatter, amplitude, free-flight time,
 #: rotor angle and time elapsed, summed striker speed at its sections, peak acceleration,
 #: how far its section state is from repeating after the period (``residual``), its cost,
@@ -113,40 +110,13 @@ Acceleration = namedtuple("Acceleration", ["jumped_at", "secant", "converged", "
 #: refined section gave (``steady``)
 Transient = namedtuple("Transient", ["ended", "steady", "count", "period", "t", "y", "data",
                                      "cost", "acceleration", "jumped"])
-#: what a section returns: its outcome (SEQUENCE_CYCLE: it reached the next section;
-#: UNDER_WAY: not ended yet), the state there, whether it chattered, its amplitude, peak,
-#: free-flight time and cost, the slowest and fastest striker speed at its contacts, their
-#: smallest distance from the tool's edge, whether the tangent went through it, and its
-#: contacts so far
+#: what a section returns: its outcome (SEQUENCE_CYCLE: it reached the next section), the
+#: state there, whether it chattered, its amplitude, peak, free-flight time and cost, the
+#: slowest and fastest striker speed at its contacts, their smallest distance from the
+#: tool's edge, and whether the tangent went through it
 Section = namedtuple("Section", ["outcome", "t", "y", "data", "chatter", "amplitude", "peak",
                                  "flight_time", "cost", "speed_min", "speed_max", "edge",
-                                 "tangent_ok", "contacts"])
-section_with = replacer(Section)
-#: the outcome of a section or a sequence under way (between two of its flights)
-UNDER_WAY = -1
-#: a sequence's transient under way (make_transient): its sections so far, the period
-#: classified, its cost, whether it jumped early (an affine map) and its jumps, the cycle
-#: that jump's refined section gave (``speculative``), the state at its last section, and
-#: for the section under way whether its flights are refined, whether the map is constant,
-#: the striker's speed, the time and rotor angle at its start
-TransientState = namedtuple("TransientState", [
-    "count", "period", "cost", "jumped", "acceleration", "speculative", "t", "y", "data",
-    "refine", "constant", "speed", "t_start", "phi_start"])
-transient_with = replacer(TransientState)
-#: a sequence in parts, for a driver that flies the flights of many sequences at once
-#: (kernels/impact/lanes.py): ``begin(p, t, y, data) -> TransientState``; ``top(ts, p, r,
-#: settings, repeat_tol, log, history, known) -> (ts, ended, Transient)``, the transient
-#: up to its next section (``ended``: the transient is over, its Transient says how), and
-#: ``bottom(ts, section, p, r, settings) -> (ts, ended, Transient)`` after that section;
-#: ``settle(transient, p, r, settings, repeat_tol, history) -> (Steady, t, y, data)`` the
-#: sequence's steady cycle after its transient; a section in parts:
-#: ``section_begin(t, y, data) -> Section`` (UNDER_WAY), ``section_contact(section, p, r,
-#: settings, refine, tangent, d) -> Section``, its next contact (UNDER_WAY: its flight is
-#: next, from the section's state), ``section_flown(section, flight, p, settings, tangent,
-#: d) -> Section`` after that flight (UNDER_WAY: its next contact is next)
-SequenceParts = namedtuple("SequenceParts", [
-    "begin", "top", "bottom", "settle", "section_begin", "section_contact",
-    "section_flown"])
+                                 "tangent_ok"])
 
 
 @njit(**INLINE_OPTIONS)
@@ -497,25 +467,24 @@ def with_cost(s, impacts, cost):
     return of_cycle(s.period, s, impacts, cost)
 
 
-def make_impact_map(c, jump_early, stability=False, known_cycles=True, methods=OTHER_METHODS):
+def make_impact_map(c, jump_early, stability=False, known_cycles=True, second_stage=True,
+                    methods=OTHER_METHODS):
     """The driver of a Contact (see the module docstring); with ``stability`` the steady
     cycle also carries the tangent of the section map (tangent.py) for its multipliers,
     its flights with ``methods`` compiled in beside DOPRI5 (the Contact's; DOP853 never:
     make_timed_flight);
     without ``known_cycles`` a sequence never looks for the cycles of other starts (a
-    single start: their search is not compiled in)."""
+    single start: their search is not compiled in); without ``second_stage`` the sequence
+    from a state (``settle``) is called only by ``steady`` and inlined into it."""
     tracker = make_tracker(c, 2 if c.model.driven else 4, methods) if stability else NO_TRACKER
     restitute = make_restitute(c)
     contact = make_contact(c, restitute)
-    section_begin, section_contact, section_flown, section = make_section(c, contact, tracker)
+    section = make_section(c, contact, tracker)
     cycle = make_cycle(c, section, tracker)
-    begin, top, bottom = make_transient(c, jump_early, known_cycles)
-    settle = make_settle(c, jump_early, cycle)
-    return Driver(section=section, contact=contact, restitute=restitute,
-                  sequence=SequenceParts(begin=begin, top=top, bottom=bottom, settle=settle,
-                                         section_begin=section_begin,
-                                         section_contact=section_contact,
-                                         section_flown=section_flown))
+    transient = make_transient(c, jump_early, section, known_cycles)
+    steady, settle = make_steady(c, jump_early, transient, cycle, second_stage)
+    return Driver(steady=steady, settle=settle, section=section, contact=contact,
+                  restitute=restitute)
 
 
 def make_restitute(c):
@@ -569,83 +538,64 @@ def make_contact(c, restitute):
 
 
 def make_section(c, contact, tracker):
-    """One section of a Contact, its contacts and flights up to the next section, in parts
-    (SequenceParts) and whole: ``(section_begin, section_contact, section_flown,
-    section)``."""
+    """One section of a Contact: its contacts and flights up to the next section."""
     _, track_flight, track_law, _ = tracker
-    fly, flight_data, escapes_before = c.flight.fly, c.flight_data, c.escapes_before
+    flight, flight_data, escapes_before = c.flight, c.flight_data, c.escapes_before
     striker_speed, edge_distance = c.striker_speed, c.edge_distance
     escape_event, min_flight = c.escape_event, c.min_flight
-
-    @njit(**INLINE_OPTIONS)
-    def section_begin(t, y, data):
-        """A section from a section contact (before its law)."""
-        return Section(UNDER_WAY, t, y, data, False, 0.0, 0.0, 0.0, NO_COST, math.inf, 0.0,
-                       math.inf, True, int(0))
-
-    @njit(**INNER_OPTIONS)
-    def section_contact(s, p, r, settings, refine, tangent, d):
-        """The section's next contact: ended (degenerate, an escape decided before the
-        flight, too many contacts), or UNDER_WAY with the state it flies from; the first d
-        columns of ``tangent`` are carried along (tangent.py)."""
-        t, y, data = s.t, s.y, s.data
-        if s.contacts >= MAX_CONTACTS_PER_SECTION:
-            return section_with(s, outcome=SEQUENCE_NOT_PERIODIC)
-        speed = striker_speed(t, y, data, p)
-        speed_min, speed_max = min(s.speed_min, speed), max(s.speed_max, speed)
-        edge = min(s.edge, edge_distance(t, y, data))
-        (opens, t, y, data, slid, zeno, a, pk, spent, t_law,
-         y_law) = contact(t, y, data, p, r, settings, refine)
-        tangent_ok = s.tangent_ok and track_law(tangent, d, s.t, s.y, s.data, t_law, y_law,
-                                                t, y, data, p, r, slid, zeno, settings)
-        # a plastic contact cannot chatter: its zero-speed touch (a graze, as where a
-        # slide's release meets the face again) is not a bounce sequence
-        s = Section(UNDER_WAY, t, y, data, s.chatter or (zeno and r > 0.0),
-                    max(s.amplitude, a), max(s.peak, pk), s.flight_time, add(s.cost, spent),
-                    speed_min, speed_max, edge, tangent_ok, s.contacts + 1)
-        if not opens:
-            return section_with(s, outcome=SEQUENCE_DEGENERATE)
-        if escapes_before(t, y, data, p):  # decided in closed form (H1, H2, H12)
-            return section_with(s, outcome=SEQUENCE_ESCAPE)
-        return s
-
-    @njit(**INNER_OPTIONS)
-    def section_flown(s, fl, p, settings, tangent, d):
-        """The section after the flight ``fl`` from its state: ended (at the next section
-        contact, or without one), or UNDER_WAY at its next contact."""
-        s = section_with(s, cost=add(s.cost, fl.cost), amplitude=max(s.amplitude, fl.amplitude),
-                       peak=max(s.peak, fl.peak))
-        if fl.outcome != FLIGHT_EVENT or fl.event == escape_event:
-            outcome = (SEQUENCE_ESCAPE if fl.outcome == FLIGHT_EVENT else
-                       SEQUENCE_NO_IMPACT if fl.outcome == FLIGHT_HORIZON else
-                       SEQUENCE_UNDERFLOW if fl.outcome == FLIGHT_UNDERFLOW else
-                       SEQUENCE_NONFINITE if fl.outcome == FLIGHT_NONFINITE else
-                       SEQUENCE_MAX_STEPS)
-            return section_with(s, outcome=outcome, t=fl.t, y=fl.y, data=fl.data)
-        tangent_ok = s.tangent_ok and track_flight(tangent, d, s.t, s.y, fl.t, fl.y, fl.f,
-                                                   fl.data, p, settings)
-        duration = fl.t - s.t
-        s = section_with(s, t=fl.t, y=fl.y, data=fl.data, flight_time=s.flight_time + duration,
-                       tangent_ok=tangent_ok)
-        if duration >= min_flight:
-            return section_with(s, outcome=SEQUENCE_CYCLE)
-        return s
 
     @njit(**INNER_OPTIONS)
     def section(t, y, data, p, r, settings, refine, tangent, d):
         """From a section contact (before its law) to the next section contact; the first
         d columns of ``tangent`` are carried along (tangent.py)."""
-        s = section_begin(t, y, data)
-        while True:
-            s = section_contact(s, p, r, settings, refine, tangent, d)
-            if s.outcome != UNDER_WAY:
-                return s
-            fl = fly(s.t, s.y, p, flight_data(s.data), settings, refine)
-            s = section_flown(s, fl, p, settings, tangent, d)
-            if s.outcome != UNDER_WAY:
-                return s
+        chatter = False
+        amplitude = peak = flight_time = 0.0
+        speed_min, speed_max, edge = math.inf, 0.0, math.inf
+        tangent_ok = True
+        cost = NO_COST
+        for _ in range(MAX_CONTACTS_PER_SECTION):
+            speed = striker_speed(t, y, data, p)
+            speed_min, speed_max = min(speed_min, speed), max(speed_max, speed)
+            edge = min(edge, edge_distance(t, y, data))
+            t0, y0, data0 = t, y, data
+            (opens, t, y, data, slid, zeno, a, pk, spent, t_law,
+             y_law) = contact(t, y, data, p, r, settings, refine)
+            tangent_ok = tangent_ok and track_law(tangent, d, t0, y0, data0, t_law, y_law,
+                                                  t, y, data, p, r, slid, zeno, settings)
+            cost = add(cost, spent)
+            # a plastic contact cannot chatter: its zero-speed touch (a graze, as where a
+            # slide's release meets the face again) is not a bounce sequence
+            chatter = chatter or (zeno and r > 0.0)
+            amplitude, peak = max(amplitude, a), max(peak, pk)
+            if not opens:
+                return Section(SEQUENCE_DEGENERATE, t, y, data, chatter, amplitude, peak,
+                               flight_time, cost, speed_min, speed_max, edge, tangent_ok)
+            if escapes_before(t, y, data, p):  # decided in closed form (H1, H2, H12)
+                return Section(SEQUENCE_ESCAPE, t, y, data, chatter, amplitude, peak,
+                               flight_time, cost, speed_min, speed_max, edge, tangent_ok)
+            fl = flight(t, y, p, flight_data(data), settings, refine)
+            cost = add(cost, fl.cost)
+            amplitude, peak = max(amplitude, fl.amplitude), max(peak, fl.peak)
+            if fl.outcome != FLIGHT_EVENT or fl.event == escape_event:
+                outcome = (SEQUENCE_ESCAPE if fl.outcome == FLIGHT_EVENT else
+                           SEQUENCE_NO_IMPACT if fl.outcome == FLIGHT_HORIZON else
+                           SEQUENCE_UNDERFLOW if fl.outcome == FLIGHT_UNDERFLOW else
+                           SEQUENCE_NONFINITE if fl.outcome == FLIGHT_NONFINITE else
+                           SEQUENCE_MAX_STEPS)
+                return Section(outcome, fl.t, fl.y, fl.data, chatter, amplitude, peak,
+                               flight_time, cost, speed_min, speed_max, edge, tangent_ok)
+            tangent_ok = tangent_ok and track_flight(tangent, d, t, y, fl.t, fl.y, fl.f,
+                                                     fl.data, p, settings)
+            duration = fl.t - t
+            flight_time += duration
+            t, y, data = fl.t, fl.y, fl.data
+            if duration >= min_flight:
+                return Section(SEQUENCE_CYCLE, t, y, data, chatter, amplitude, peak,
+                               flight_time, cost, speed_min, speed_max, edge, tangent_ok)
+        return Section(SEQUENCE_NOT_PERIODIC, t, y, data, chatter, amplitude, peak,
+                       flight_time, cost, speed_min, speed_max, edge, tangent_ok)
 
-    return section_begin, section_contact, section_flown, section
+    return section
 
 
 def make_cycle(c, section, tracker):
@@ -779,135 +729,116 @@ def make_record(c):
     return record
 
 
-def make_transient(c, jump_early, known_cycles=True):
-    """The transient of a Contact in parts (SequenceParts' begin, top, bottom): sections
-    from (t, y) until p of them repeat (``history`` holds their states), one is on a cycle
-    of ``known`` (known_attractor, captured_by; with ``known_cycles`` only), or the sequence
-    settles nowhere (settles_nowhere); accelerated where the map allows it: on an affine
-    map (``jump_early``) by Aitken's jump from the start and two sections (aitken_jump), on
-    another smooth map with a 2-D section by fixed-point jumps and Broyden's steps
-    (make_accelerators). Its sections are flown by the caller, between ``top`` and
-    ``bottom``."""
+def make_transient(c, jump_early, section, known_cycles=True):
+    """The transient of a Contact: ``transient(p, data, r, settings, repeat_tol, log, t, y,
+    history, known) -> Transient``, sections from (t, y) until p of them repeat
+    (``history`` holds their states), one is on a cycle of ``known`` (known_attractor,
+    captured_by; with ``known_cycles`` only),
+    or the sequence settles nowhere (settles_nowhere); accelerated where the map allows
+    it: on an affine map (``jump_early``) by Aitken's jump from the start and two
+    sections (aitken_jump), on another smooth map with a 2-D section by fixed-point jumps
+    and Broyden's steps (make_accelerators)."""
     key_of, striker_speed, rotor_angle = c.key, c.striker_speed, c.model.rotor_angle
     smooth = c.smooth
     land, fixed_point, broyden = make_accelerators(c)
     record = make_record(c)
 
     @njit(**INNER_OPTIONS)
-    def begin(p, t, y, data):
-        """The transient from the state (t, y, data), before its first section."""
+    def transient(p, data, r, settings, repeat_tol, log, t, y, history, known):
+        no_tangent = np.empty((5, 0))  # the transient's sections carry no tangent
+        smooth_2d = not jump_early and smooth and history.shape[1] == 2
         a = Acceleration(jumped_at=1, secant=False, converged=False, jac=(0.0, 0.0, 0.0, 0.0),
                          x_secant=(0.0, 0.0), f_secant=(0.0, 0.0), t_orbit=t, y_orbit=y,
                          first_jump=0, x_rest=(0.0, 0.0))
-        speculative = no_cycle(SEQUENCE_MAX_STEPS, False, 0, NO_COST, key_of(t, y, data, p))
         # int(): a literal 0 would compile record for the literal too (kernels/__init__.py)
-        return TransientState(count=int(0), period=int(0), cost=NO_COST, jumped=bool(False),
-                              acceleration=a, speculative=speculative, t=t, y=y, data=data,
-                              refine=bool(False), constant=bool(False), speed=0.0,
-                              t_start=t, phi_start=0.0)
+        count, period, cost, jumped = int(0), int(0), NO_COST, False
+        speculative = no_cycle(SEQUENCE_MAX_STEPS, False, 0, NO_COST, key_of(t, y, data, p))
+        while count <= settings.max_impacts:
+            key = record(t, y, data, p, history, count, log)
+            count += 1
+            hit = -1
+            if known_cycles:  # its own test, so that numba prunes it for a single start
+                hit = known_attractor(known, key)
+                if hit < 0:  # captured on its way: the cycle's own state stands for it
+                    hit = captured_by(known, history, count)
+                    if hit >= 0:
+                        key = from_row(key, known[hit], int(KNOWN.key))
+            period = classify_period(history, count, repeat_tol, MAX_PERIOD)
+            # on a cycle found before: that attractor (its values are known); or, away from
+            # the accelerators' jumps, a sequence as not periodic as its budget would find it
+            if hit >= 0 or (period == 0 and not a.secant and 2 * a.jumped_at < count
+                            and settles_nowhere(history, count, settings, repeat_tol)):
+                return ended(on_known(known[hit], key, count, cost) if hit >= 0 else no_cycle(
+                    SEQUENCE_NOT_PERIODIC, False, settings.max_impacts, cost, key),
+                    count, t, y, data, a)
+            # right after a transient jump, one section more: Aitken at the end needs three
+            # sections of the map's own (a jumped state's section repeats it only to tol)
+            if period > 0 and not (a.jumped_at > 1 and count < a.jumped_at + 2):
+                break
+            # an affine map of slope r = 0 is constant: its first section is the cycle
+            constant = jump_early and r == 0.0
+            refine = bool(constant)  # bool(): see kernels/__init__.py
+            if smooth:  # its own test, so that numba prunes the jumps of a map without them
+                if a.secant and count == a.jumped_at + 1:
+                    a, t, y = broyden(a, history, count, t, y, data, p, repeat_tol)
+                    if a.converged:
+                        period = 1
+                        break
+                elif smooth_2d and count - a.jumped_at >= 3:
+                    a, t, y = fixed_point(a, history, count, t, y, data, p)
+            if jump_early and count == 3:  # the next section, refined, is to confirm it
+                t, y = land(aitken_jump(history, 2), t, y, data, p, history, count - 1)
+                refine = jumped = True
+            speed = striker_speed(t, y, data, p)
+            t_start, phi_start = t, rotor_angle(t, y)
+            s = section(t, y, data, p, r, settings, refine, no_tangent, int(0))
+            cost = add(cost, s.cost)
+            if s.outcome != SEQUENCE_CYCLE:
+                return ended(no_cycle(s.outcome, s.chatter, count, cost,
+                                      key_of(t, y, data, p)), count, t, y, data, a)
+            t, y, data = s.t, s.y, s.data
+            if refine:
+                # one impact a cycle on a smooth map: no edge, the multiplier in closed form
+                speculative = Steady(
+                    outcome=SEQUENCE_CYCLE, period=1, chatter=s.chatter,
+                    amplitude=s.amplitude, flight_time=s.flight_time,
+                    rotor_angle=rotor_angle(t, y) - phi_start, elapsed=t - t_start,
+                    speed=speed, peak=s.peak, impacts=0, cost=NO_COST,
+                    margins=Margins(speed, speed, math.inf, math.nan, math.nan),
+                    key=key_of(t, y, data, p))
+            if constant:
+                return ended(Steady(
+                    outcome=SEQUENCE_CYCLE, period=1, chatter=s.chatter,
+                    amplitude=s.amplitude, flight_time=s.flight_time,
+                    rotor_angle=speculative.rotor_angle, elapsed=speculative.elapsed,
+                    speed=striker_speed(t, y, data, p), peak=s.peak, impacts=1, cost=cost,
+                    margins=speculative.margins, key=speculative.key), count, t, y, data, a)
+        return Transient(ended=bool(False), steady=speculative, count=count, period=period, t=t,
+                         y=y, data=data, cost=cost, acceleration=a, jumped=jumped)
 
-    @njit(**INLINE_OPTIONS)
-    def over(ts):
-        """The Transient of a transient that ended at its loop's end (a cycle found)."""
-        return Transient(ended=bool(False), steady=ts.speculative, count=ts.count,
-                         period=ts.period, t=ts.t, y=ts.y, data=ts.data, cost=ts.cost,
-                         acceleration=ts.acceleration, jumped=ts.jumped)
-
-    @njit(**INNER_OPTIONS)
-    def top(ts, p, r, settings, repeat_tol, log, history, known):
-        """The transient up to its next section: (ts, ended, Transient)."""
-        if not ts.count <= settings.max_impacts:
-            return ts, True, over(ts)
-        a, t, y, data, cost = ts.acceleration, ts.t, ts.y, ts.data, ts.cost
-        smooth_2d = not jump_early and smooth and history.shape[1] == 2
-        key = record(t, y, data, p, history, ts.count, log)
-        count = ts.count + 1
-        hit = -1
-        if known_cycles:  # its own test, so that numba prunes it for a single start
-            hit = known_attractor(known, key)
-            if hit < 0:  # captured on its way: the cycle's own state stands for it
-                hit = captured_by(known, history, count)
-                if hit >= 0:
-                    key = from_row(key, known[hit], int(KNOWN.key))
-        period = classify_period(history, count, repeat_tol, MAX_PERIOD)
-        ts = transient_with(ts, count=count, period=period)
-        # on a cycle found before: that attractor (its values are known); or, away from
-        # the accelerators' jumps, a sequence as not periodic as its budget would find it
-        if hit >= 0 or (period == 0 and not a.secant and 2 * a.jumped_at < count
-                        and settles_nowhere(history, count, settings, repeat_tol)):
-            return ts, True, ended(on_known(known[hit], key, count, cost) if hit >= 0 else
-                                   no_cycle(SEQUENCE_NOT_PERIODIC, False, settings.max_impacts,
-                                            cost, key), count, t, y, data, a)
-        # right after a transient jump, one section more: Aitken at the end needs three
-        # sections of the map's own (a jumped state's section repeats it only to tol)
-        if period > 0 and not (a.jumped_at > 1 and count < a.jumped_at + 2):
-            return ts, True, over(ts)
-        # an affine map of slope r = 0 is constant: its first section is the cycle
-        constant = jump_early and r == 0.0
-        refine = bool(constant)  # bool(): see kernels/__init__.py
-        jumped = ts.jumped
-        if smooth:  # its own test, so that numba prunes the jumps of a map without them
-            if a.secant and count == a.jumped_at + 1:
-                a, t, y = broyden(a, history, count, t, y, data, p, repeat_tol)
-                if a.converged:
-                    ts = transient_with(ts, period=int(1), acceleration=a, t=t, y=y)
-                    return ts, True, over(ts)
-            elif smooth_2d and count - a.jumped_at >= 3:
-                a, t, y = fixed_point(a, history, count, t, y, data, p)
-        if jump_early and count == 3:  # the next section, refined, is to confirm it
-            t, y = land(aitken_jump(history, 2), t, y, data, p, history, count - 1)
-            refine = jumped = True
-        ts = transient_with(ts, acceleration=a, t=t, y=y, jumped=jumped, refine=refine,
-                         constant=constant, speed=striker_speed(t, y, data, p), t_start=t,
-                         phi_start=rotor_angle(t, y))
-        return ts, False, over(ts)
-
-    @njit(**INNER_OPTIONS)
-    def bottom(ts, s, p, r, settings):
-        """The transient after the section ``s`` it flew from its state: (ts, ended,
-        Transient)."""
-        t, y, data, a = ts.t, ts.y, ts.data, ts.acceleration
-        cost = add(ts.cost, s.cost)
-        ts = transient_with(ts, cost=cost)
-        if s.outcome != SEQUENCE_CYCLE:
-            return ts, True, ended(no_cycle(s.outcome, s.chatter, ts.count, cost,
-                                            key_of(t, y, data, p)), ts.count, t, y, data, a)
-        t, y, data = s.t, s.y, s.data
-        speculative = ts.speculative
-        if ts.refine:
-            # one impact a cycle on a smooth map: no edge, the multiplier in closed form
-            speculative = Steady(
-                outcome=SEQUENCE_CYCLE, period=1, chatter=s.chatter,
-                amplitude=s.amplitude, flight_time=s.flight_time,
-                rotor_angle=rotor_angle(t, y) - ts.phi_start, elapsed=t - ts.t_start,
-                speed=ts.speed, peak=s.peak, impacts=0, cost=NO_COST,
-                margins=Margins(ts.speed, ts.speed, math.inf, math.nan, math.nan),
-                key=key_of(t, y, data, p))
-        ts = transient_with(ts, t=t, y=y, data=data, speculative=speculative)
-        if ts.constant:
-            return ts, True, ended(Steady(
-                outcome=SEQUENCE_CYCLE, period=1, chatter=s.chatter,
-                amplitude=s.amplitude, flight_time=s.flight_time,
-                rotor_angle=speculative.rotor_angle, elapsed=speculative.elapsed,
-                speed=striker_speed(t, y, data, p), peak=s.peak, impacts=1, cost=cost,
-                margins=speculative.margins, key=speculative.key), ts.count, t, y, data, a)
-        return ts, False, over(ts)
-
-    return begin, top, bottom
+    return transient
 
 
-def make_settle(c, jump_early, cycle):
-    """The steady cycle of a Contact after its transient (SequenceParts.settle):
-    ``settle(tr, p, r, settings, repeat_tol, history) -> (Steady, t, y, data)``, from the
-    Transient ``tr`` and the section states it left in ``history``. The cycle's section
-    states repeat to ``repeat_tol``; the Steady of a sequence that reached a cycle of other
-    starts (known_attractor) reports that cycle's outcome, period, chatter and this
-    section state, without its values. Also returns the state on the cycle its values
-    were run from (where the sequence ended, without one)."""
-    key_of, from_key, smooth = c.key, c.from_key, c.smooth
+def make_steady(c, jump_early, transient, cycle, second_stage=True):
+    """The whole sequence of a Contact: ``steady(p, data, r, settings, repeat_tol, log,
+    start, known) -> (Steady, t, y, data)`` from a starting state (see the module
+    docstring), and ``settle(p, data, r, settings, repeat_tol, log, t, y, known)`` the
+    same from the state (t, y, data); each also returns the state its cycle ran from."""
+    first, key_of, from_key, smooth = c.first, c.key, c.from_key, c.smooth
 
-    @njit(**INNER_OPTIONS)
-    def settle(tr, p, r, settings, repeat_tol, history):
+    # one caller (steady) where no second stage goes on from a state: inlined into it, one
+    # function fewer to compile
+    @njit(**(INNER_OPTIONS if second_stage else INLINE_OPTIONS))
+    def settle(p, data, r, settings, repeat_tol, log, t, y, known):
+        """The sequence from (t, y, data) to its steady cycle, within settings.max_impacts,
+        its cycle's section states repeating to ``repeat_tol``; log[j] gets (rotor angle
+        mod 2 pi, psi) at section j (the last row takes any beyond). It stops at a section
+        state of a cycle in ``known`` (known_attractor), and reports that cycle's outcome,
+        period, chatter and this section state, without its values. Returns the Steady and
+        the state on the cycle its values were run from (where the sequence ended, without
+        one)."""
+        history = np.empty((settings.max_impacts + 2, len(key_of(t, y, data, p))))
+        tr = transient(p, data, r, settings, repeat_tol, log, t, y, history, known)
         if tr.ended:
             return tr.steady, tr.t, tr.y, tr.data
         count, period, a, cost = tr.count, tr.period, tr.acceleration, tr.cost
@@ -951,4 +882,11 @@ def make_settle(c, jump_early, cycle):
                     t_run, y_run, data)
         return of_cycle(period, result, impacts, cost), t_run, y_run, data
 
-    return settle
+    @njit(**INNER_OPTIONS)
+    def steady(p, data0, r, settings, repeat_tol, log, start, known):
+        """The sequence from starting state number ``start`` (0: at rest, the tool's
+        ``first``), as ``settle``."""
+        t, y, data = first(p, data0, start)
+        return settle(p, data, r, settings, repeat_tol, log, t, y, known)
+
+    return steady, settle

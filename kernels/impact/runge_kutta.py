@@ -87,22 +87,18 @@ def _no_exact(y, h, p):
     return y
 
 
-def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS, inline=False):
+def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS):
     """The step of the methods, specialised to rhs, the error scales and, where the system
     has one, its exact flow ``exact(y, h, p)`` (its error estimate is 0); a system without
     one takes DOPRI5's step for METHOD_EXACT (the rule at METHOD_EXACT). DOPRI5 is always
     compiled in, DOP853 and RK4 where ``methods`` has them: without DOP853 its callers step
     by DOPRI5 (``low_order``); without RK4 they never ask for it (a pendulum system's entry
-    point is chosen by its method, systems.entry_point). With ``inline`` the step and its
-    stages are inlined into their caller (numba's IR): a loop of steps over several
-    flights is then vectorised by LLVM (kernels/impact/lanes.py), with the same operations
-    as the step called."""
-    options = INLINE_OPTIONS if inline else INNER_OPTIONS
+    point is chosen by its method, systems.entry_point)."""
     has_exact = exact is not None
     exact = exact if has_exact else _no_exact
     high_order, fixed_step = METHOD_DOP853 in methods, METHOD_RK4 in methods
 
-    @njit(**options)
+    @njit(**INNER_OPTIONS)
     def dopri5(y, f0, h, p):
         k1 = f0
         k2 = rhs(lincomb(y, h, (A21,), (k1,)), p)
@@ -115,7 +111,7 @@ def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS, inline=False):
         err = weighted(h, (E1, E3, E4, E5, E6, E7), (k1, k3, k4, k5, k6, k7))
         return y1, k7, err
 
-    @njit(**options)
+    @njit(**INNER_OPTIONS)
     def dop853(y, f0, h, p):
         k1 = f0
         k2 = rhs(lincomb(y, h, D_A2, (k1,)), p)
@@ -133,7 +129,7 @@ def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS, inline=False):
         y1 = lincomb(y, h, D_B, ks)
         return y1, rhs(y1, p), weighted(h, D_E5, ks), weighted(h, D_E3, ks)
 
-    @njit(**options)
+    @njit(**INNER_OPTIONS)
     def rk4(y, f0, h, p):
         k2 = rhs(lincomb(y, h, (0.5,), (f0,)), p)
         k3 = rhs(lincomb(y, h, (0.5,), (k2,)), p)
@@ -141,7 +137,7 @@ def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS, inline=False):
         y1 = lincomb(y, h / 6.0, (1.0, 2.0, 2.0, 1.0), (f0, k2, k3, k4))
         return y1, rhs(y1, p)
 
-    @njit(**options)
+    @njit(**INNER_OPTIONS)
     def step(method, y, f0, h, p, rtol, atol):
         if has_exact and method == METHOD_EXACT:
             y1 = exact(y, h, p)

@@ -70,44 +70,6 @@ def from_row(like, row, offset):
     return tuple(row[offset + i] for i in range(len(like)))
 
 
-def gather(like, buf, offset, stride):
-    """A tuple as long as ``like`` of buf[offset], buf[offset + stride], ... (one lane's
-    field in a lane-minor buffer, kernels/impact/lanes.py)."""
-    return tuple(buf[offset + i * stride] for i in range(len(like)))
-
-
-def scatter(values, buf, offset, stride):
-    """buf[offset + i * stride] = values[i], each i (gather's inverse)."""
-    for i, v in enumerate(values):
-        buf[offset + i * stride] = v
-
-
-def replacer(cls):
-    """``replace(record, **fields)`` for records of the namedtuple ``cls``, in numba too
-    (which has no ``_replace``): the record with the fields given replaced."""
-    fields = cls._fields
-    signature = ", ".join(f"{f}=None" for f in fields)
-    passed = ", ".join(f"{f}={f}" for f in fields)
-
-    def replace_python(record, **given):
-        return record._replace(**{f: v for f, v in given.items() if v is not None})
-
-    def implementation(record, **given):
-        body = ", ".join(
-            f"record.{f}" if isinstance(given[f], (types.Omitted, types.NoneType))
-            or given[f] is None else f for f in fields)
-        namespace = {"cls": cls}
-        exec(f"def replace(record, {signature}):\n    return cls({body})\n", namespace)
-        return namespace["replace"]
-
-    namespace = {"replace_python": replace_python, "implementation": implementation}
-    exec(f"def replace(record, {signature}):\n    return replace_python(record, {passed})\n"
-         f"def typer(record, {signature}):\n    return implementation(record, {passed})\n",
-         namespace)
-    overload(namespace["replace"], inline="always")(namespace["typer"])
-    return namespace["replace"]
-
-
 def _length(tup):
     return tup.count if isinstance(tup, types.UniTuple) else len(tup.types)
 
@@ -127,23 +89,6 @@ def _lincomb(y, h, coefs, ks):
 def _from_row(like, row, offset):
     return _compile("from_row", "like, row, offset",
                     _tuple([f"row[offset + {i}]" for i in range(_length(like))]))
-
-
-@overload(gather, inline="always")
-def _gather(like, buf, offset, stride):
-    return _compile("gather", "like, buf, offset, stride",
-                    _tuple([f"buf[offset + {i} * stride]" for i in range(_length(like))]))
-
-
-@overload(scatter, inline="always")
-def _scatter(values, buf, offset, stride):
-    n = _length(values)
-    namespace = {}
-    exec("def scatter(values, buf, offset, stride):\n"
-         + "".join(f"    buf[offset + {i} * stride] = values[{i}]\n" for i in range(n))
-         + "    return None\n",
-         namespace)
-    return namespace["scatter"]
 
 
 @overload(weighted)

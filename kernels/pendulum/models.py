@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
-from kernels.elementary import jacobi_small, sincos_lane, sincos_quadrant
+from kernels.elementary import jacobi_small, sincos_quadrant
 from kernels.impact.events import make_illinois
 from kernels.impact.tuples import relative_scales
 
@@ -32,13 +32,12 @@ MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR = 0, 1, 2
 
 #: the functions of a model (see the module docstring); where its flow is known in closed
 #: form, ``exact(y, h, p)``, ``exact_length(y, p, length)`` (its step) and
-#: ``speed_bound(y, p)`` (the largest |psi'| of the free motion from y); ``lane_rhs``: rhs
-#: with no call in it, for the steps taken in lanes (System.lane_rhs; None: rhs)
+#: ``speed_bound(y, p)`` (the largest |psi'| of the free motion from y)
 Model = namedtuple("Model", [
     "rhs", "scales", "monitor", "accelerations", "response", "rotor_angle", "rotor_speed",
     "psi", "dpsi", "compose", "critical_speed", "shift", "driven", "jacobian",
     "response_slope", "tangent_state", "tangent_coordinates", "swing", "exact",
-    "exact_length", "speed_bound", "lane_rhs"], defaults=(None, None, None, None))
+    "exact_length", "speed_bound"], defaults=(None, None, None))
 
 #: the half period's Gauss-Legendre panels: 20 nodes each, halving towards the turning point
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
@@ -159,31 +158,22 @@ def driven_model(rhs, critical_speed, jacobian, swing, exact=None, exact_length=
 
 # ---------------------------------------------------------------- rotor of finite inertia
 
-@njit(**INLINE_OPTIONS)
+@njit(**KERNEL_OPTIONS)
 def mass_matrix(psi, k, xi, j1):
-    """(M11, M12, M22) of T = M11 phi1'^2/2 + M12 phi1' psi' + M22 psi'^2/2 (P8). The rotor
-    model's sines and cosines are sincos_lane's: its step has no call, so that it
-    vectorises over lanes (kernels/impact/lanes.py)."""
-    c = sincos_lane(psi)[1]
+    """(M11, M12, M22) of T = M11 phi1'^2/2 + M12 phi1' psi' + M22 psi'^2/2 (P8)."""
+    c = math.cos(psi)
     return j1 + 1.0 + xi * (k * k + 1.0 + 2.0 * k * c), 1.0 + xi * (1.0 + k * c), 1.0 + xi
 
 
-def _rotor_accelerations(w, psi, dpsi, k, xi, j1, slope, idle):
+@njit(**KERNEL_OPTIONS)
+def rotor_accelerations(w, psi, dpsi, k, xi, j1, slope, idle):
     """(phi1'', psi'') from (P9)-(P10), solving the 2x2 mass-matrix system."""
     m11, m12, m22 = mass_matrix(psi, k, xi, j1)
-    s = xi * k * sincos_lane(psi)[0]
+    s = xi * k * math.sin(psi)
     rhs1 = slope * (idle - w) + s * (2.0 * w * dpsi + dpsi * dpsi)
     rhs2 = -s * w * w
     det = m11 * m22 - m12 * m12
     return (m22 * rhs1 - m12 * rhs2) / det, (m11 * rhs2 - m12 * rhs1) / det
-
-
-#: the accelerations called (one copy, for every flight taken one at a time), and the same
-#: inlined into the steps taken in lanes, where a call would stop the loop vectorising
-#: (inlined everywhere, numba's inlining of them into every stage of every stepper took
-#: longer than the rest of the stability example's compile)
-rotor_accelerations = njit(**INNER_OPTIONS)(_rotor_accelerations)
-_rotor_accelerations_inlined = njit(**INLINE_OPTIONS)(_rotor_accelerations)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -201,7 +191,7 @@ def rotor_jacobian(y, p):
     w, psi, v = y[1], y[2], y[3]
     m11, m12, m22 = mass_matrix(psi, k, xi, j1)
     a1, b2 = rotor_accelerations(w, psi, v, k, xi, j1, slope, idle)
-    sn, cs = sincos_lane(psi)
+    sn, cs = math.sin(psi), math.cos(psi)
     s, ds = xi * k * sn, xi * k * cs
     dm11, dm12 = -2.0 * xi * k * sn, -xi * k * sn  # dM/dpsi (M22 is constant)
     aw = _solve(m11, m12, m22, -slope + 2.0 * s * v, -2.0 * s * w)
@@ -220,7 +210,7 @@ def rotor_response_slope(y, j_phi, j_psi, dj_phi, dj_psi, p):
     k, xi, j1, slope, idle = p
     m11, m12, m22 = mass_matrix(y[2], k, xi, j1)
     x_phi, x_psi = _solve(m11, m12, m22, j_phi, j_psi)
-    sn = sincos_lane(y[2])[0]
+    sn = math.sin(y[2])
     dm11, dm12 = -2.0 * xi * k * sn, -xi * k * sn
     return _solve(m11, m12, m22, dj_phi - dm11 * x_phi - dm12 * x_psi,
                   dj_psi - dm12 * x_phi)
@@ -236,21 +226,11 @@ def rotor_tangent_coordinates(dt, dy):
     return (dt, dy[0], dy[1], dy[2], dy[3])
 
 
-def _rotor_rhs_by(accelerations):
-    """The rotor model's right-hand side in (phi1, phi1', psi, psi'), by ``accelerations``
-    (called or inlined)."""
-    @njit(**INLINE_OPTIONS)
-    def rhs(y, p):
-        k, xi, j1, slope, idle = p
-        a1, b2 = accelerations(y[1], y[2], y[3], k, xi, j1, slope, idle)
-        return (y[1], a1, y[3], b2)
-
-    return rhs
-
-
-rotor_rhs = _rotor_rhs_by(rotor_accelerations)
-#: the same, for the steps in lanes (Model.lane_rhs)
-rotor_lane_rhs = _rotor_rhs_by(_rotor_accelerations_inlined)
+@njit(**INLINE_OPTIONS)
+def rotor_rhs(y, p):
+    k, xi, j1, slope, idle = p
+    a1, b2 = rotor_accelerations(y[1], y[2], y[3], k, xi, j1, slope, idle)
+    return (y[1], a1, y[3], b2)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -328,7 +308,7 @@ ROTOR = Model(rotor_rhs, rotor_scales, rotor_monitor, rotor_model_accelerations,
               rotor_response, rotor_rotor_angle, rotor_rotor_speed, rotor_psi, rotor_dpsi,
               rotor_compose, no_critical_speed, rotor_shift, False, rotor_jacobian,
               rotor_response_slope, rotor_tangent_state, rotor_tangent_coordinates,
-              no_swing, lane_rhs=rotor_lane_rhs)
+              no_swing)
 
 
 @njit(**KERNEL_OPTIONS)

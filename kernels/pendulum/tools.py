@@ -29,12 +29,10 @@ import numpy as np
 from numba import njit
 
 from kernels import INNER_OPTIONS, INLINE_OPTIONS
-from kernels.elementary import atan2_lane, sincos_lane
 from kernels.extrema import peak_search
 from kernels.impact import Contact, System, no_coast
 from kernels.impact.events import make_illinois
-from kernels.impact.flight import (EXACT_REACH, Flier, Flight, flight_with, make_flight,
-                                   make_fly)
+from kernels.impact.flight import EXACT_REACH, Flight, make_flight
 from kernels.impact.impact_map import radical_inverse
 from kernels.impact.outcomes import FLIGHT_EVENT, NO_COST
 from kernels.impact.runge_kutta import OTHER_METHODS
@@ -140,9 +138,9 @@ def _gap_acceleration_change(model):
 
 
 def stop_flight(model, methods=OTHER_METHODS):
-    """The free flight of a pendulum below a stop fixed on the rotor at psi = data[0]
-    (a ``Flier``): events 0, the stop (psi rising through it), and 1, escape (psi falling
-    through -pi); ``methods``: those compiled in beside DOPRI5 (System)."""
+    """The free flight of a pendulum below a stop fixed on the rotor at psi = data[0]:
+    events 0, the stop (psi rising through it), and 1, escape (psi falling through -pi);
+    ``methods``: those compiled in beside DOPRI5 (System)."""
     psi_of, monitor = model.psi, model.monitor
 
     @njit(**INLINE_OPTIONS)
@@ -163,13 +161,8 @@ def stop_flight(model, methods=OTHER_METHODS):
         angle, rate, accel = monitor(t, y, f)
         return rate, accel
 
-    @njit(**INLINE_OPTIONS)
-    def lane_events(t, y, f, data):
-        return values(t, y, data), rates(t, y, f, data)  # no call: the events themselves
-
     return make_flight(System(model.rhs, model.scales, values, rates, (1, -1), on_event,
-                              start_gap, monitor, methods=methods, lane_events=lane_events,
-                              lane_rhs=model.lane_rhs))
+                              start_gap, monitor, methods=methods))[0]
 
 
 def rotor_stop(model, methods=OTHER_METHODS):
@@ -382,9 +375,9 @@ def _constrained_slide(model, gap_change, methods):
     def slide_monitor(t, s, f):
         return s[0], f[0], f[1]
 
-    slide_flight = make_flight(System(slide_rhs, relative_scales, slide_values, slide_rates,
-                                      (-1, 1), slide_on_event, slide_start, slide_monitor,
-                                      methods=methods)).fly
+    slide_flight, _ = make_flight(System(slide_rhs, relative_scales, slide_values,
+                                         slide_rates, (-1, 1), slide_on_event, slide_start,
+                                         slide_monitor, methods=methods))
 
     @njit(**INNER_OPTIONS)
     def slide(t, y, data, p, settings, refine):
@@ -607,35 +600,23 @@ def lab_window(model, methods=OTHER_METHODS):
         face = min(abs(g0), abs(g1)) / (abs(rotor_speed(y)) + h_max * speed)
         return min(face, min(abs(g2), abs(psi_of(y))) / speed) if speed > 0.0 else face
 
-    @njit(**INLINE_OPTIONS)
-    def lane_events(t, y, f, data):
-        """values and rates within a few ulp, by sincos_lane and atan2_lane (no call)."""
-        lower, k = data[0], data[2]
-        psi, dpsi, w = psi_of(y), monitor(t, y, f)[1], rotor_speed(y)
-        sn, cs = sincos_lane(psi)
-        b = atan2_lane(sn, k + cs)
-        phi1 = rotor_angle(t, y)
-        g_rate = w + (1.0 + k * cs) / (k * k + 1.0 + 2.0 * k * cs) * dpsi
-        return (((phi1 - (lower + TWO_PI)) + b, (phi1 - lower) + b, abs(psi) - math.pi),
-                (g_rate, g_rate, math.copysign(1.0, psi) * dpsi))
-
-    free = make_flight(System(model.rhs, model.scales, values, rates, (1, -1, 1), on_event,
-                              start_gap, monitor,
-                              _swing_coast(model) if model.driven else no_coast,
-                              model.exact, model.exact_length, methods,
-                              clear_time if speed_bound is not None else None,
-                              lane_events, model.lane_rhs))
+    free_flight, _ = make_flight(System(model.rhs, model.scales, values, rates, (1, -1, 1),
+                                        on_event, start_gap, monitor,
+                                        _swing_coast(model) if model.driven else no_coast,
+                                        model.exact, model.exact_length, methods,
+                                        clear_time if speed_bound is not None else None))
     shift = model.shift
-    # bound to names: numba inlines a closure's function (INLINE_OPTIONS), not a tuple's
-    free_begin, free_after = free.begin, free.after
 
-    # The free flight with the rotor angle measured from the last contact's face (its
-    # ``origin``): it grows without bound, and a chatter bounce 1e-15 deep is below the
-    # rounding of a rotor angle of 30 (the time, at constant speed). A contact ends exactly
-    # on its face.
-    @njit(**INLINE_OPTIONS)
-    def landed(fl, level):
-        """The Flight of the free flight ``fl`` (from the face at ``level``) in the lab."""
+    @njit(**INNER_OPTIONS)
+    def flight(t, y, p, data, settings, refine):
+        """The free flight with the rotor angle measured from the last contact's face: it
+        grows without bound, and a chatter bounce 1e-15 deep is below the rounding of a
+        rotor angle of 30 (the time, at constant speed). A contact ends exactly on its
+        face."""
+        lower, window, k, level, side = data
+        t_rel, y_rel = shift(t, y, -level)
+        fl = free_flight(t_rel, y_rel, p, (lower - level, window, k, 0.0, side), settings,
+                         refine)
         t_end, y_end = shift(fl.t, fl.y, level)
         lower2, window2, k2, level2, side2 = fl.data
         level2 += level
@@ -643,26 +624,10 @@ def lab_window(model, methods=OTHER_METHODS):
             # exactly on the face: psi from the rotor angle, whose rounding grows with it
             phi1, psi = rotor_angle(t_end, y_end), psi_of(y_end)
             t_end, y_end = compose(t_end, phi1, rotor_speed(y_end),
-                                   face_psi(level2 - phi1, psi, k2), dpsi_of(y_end))
+                                   face_psi(level2 - phi1, psi, k), dpsi_of(y_end))
         return Flight(fl.outcome, fl.event, t_end, y_end, fl.f,
                       (lower2 + level, window2, k2, level2, side2), fl.amplitude, fl.peak,
                       fl.cost)
-
-    @njit(**INLINE_OPTIONS)
-    def begin(t, y, p, data, settings, refine):
-        lower, window, k, level, side = data
-        t_rel, y_rel = shift(t, y, -level)
-        st, ended, fl = free_begin(t_rel, y_rel, p, (lower - level, window, k, 0.0, side),
-                                   settings, refine)
-        return flight_with(st, origin=level), ended, landed(fl, level)
-
-    @njit(**INLINE_OPTIONS)
-    def after(st, y1, f1, err, p, settings, clear):
-        st, ended, fl = free_after(st, y1, f1, err, p, settings, clear)
-        return st, ended, landed(fl, st.origin) if ended else fl
-
-    flight = Flier(fly=make_fly(begin, after, free.step), begin=begin, after=after,
-                   step=free.step, lane_step=free.lane_step, lane_clear=free.lane_clear)
 
     gap_change = _gap_acceleration_change(model)
     if model.driven:
