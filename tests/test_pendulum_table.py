@@ -7,6 +7,7 @@ the rotor stop's (the mirror image of every flight and contact), which the close
 independently (kernels/pendulum/closed_form.py)."""
 
 import math
+import subprocess
 import sys
 from pathlib import Path
 
@@ -173,6 +174,46 @@ def test_entry_points_and_dispatch_follow_the_table():
     assert len(table.BY_CODES) == len(table.MODELS) * len(table.TOOLS)
     decl = {q.name: q for q in DECLARATION.parameters}
     assert decl["model"].choices == table.MODELS and decl["tool"].choices == table.TOOLS
+
+
+def test_a_process_makes_only_the_entry_points_it_looks_up():
+    """Importing the systems makes no entry point and no contact; looking one up makes it
+    and its contact, once, and nothing else; threads that look up the same one at once get
+    the same function (blocks run on threads). In a fresh process: this one's tests have
+    made others already."""
+    code = """
+import threading
+from numba.core.dispatcher import Dispatcher
+import gc
+from kernels.pendulum import systems, table
+from kernels.impact.runge_kutta import METHOD_DOPRI5
+assert not systems.ENTRY_POINTS._made and not systems.CONTACTS._made
+before = sum(isinstance(o, Dispatcher) for o in gc.get_objects())
+row = table.BY_CODES[table.MODELS["rotor"], table.TOOLS["rotor_stop"]]
+got = []
+threads = [threading.Thread(target=lambda: got.append(
+    systems.entry_point(row, METHOD_DOPRI5, two_stage=True))) for _ in range(4)]
+for t in threads:
+    t.start()
+for t in threads:
+    t.join()
+assert len(got) == 4 and all(g is got[0] for g in got)
+assert list(systems.ENTRY_POINTS._made) == [(row, False, (), True, False)]
+assert list(systems.CONTACTS._made) == [("rotor", "rotor_stop", ())]
+made = sum(isinstance(o, Dispatcher) for o in gc.get_objects()) - before
+every = len(systems.ENTRY_POINTS)
+paper = table.BY_CODES[table.MODELS["paper"], table.TOOLS["rotor_stop"]]
+assert (paper, True, (), True, False) not in systems.ENTRY_POINTS  # no tangent: no key
+assert (row, True, (), True, False) in systems.ENTRY_POINTS  # a key, not made
+assert len(systems.ENTRY_POINTS._made) == 1
+print(made, every)
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=Path(__file__).resolve().parent.parent)
+    assert out.returncode == 0, out.stderr
+    made, every = map(int, out.stdout.split())
+    # one system's block, not every system's variants (each a tree of functions)
+    assert 0 < made < 200 and every > 100
 
 
 def test_the_rules_and_the_docs_list_come_from_the_table():

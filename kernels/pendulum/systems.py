@@ -2,13 +2,15 @@
 core's impact map specialised to it, and a block function that solves the cases of one
 system.
 
-Each system's entry points are made here from the table, module level (numba caches them
-on disk), and compiled only when a sweep has a case of its system and method: a sweep of the
-paper model on the rotor stop never compiles the rotor model on the blade, and one by DOPRI5
-never compiles DOP853 (``entry_point``).
+Each system's entry points are made here from the table, as module-level functions (numba
+caches them on disk), on first lookup, and compiled only when a sweep has a case of its
+system and method: a sweep of the paper model on the rotor stop never makes or compiles the
+rotor model on the blade, and one by DOPRI5 never compiles DOP853 (``entry_point``).
 """
 
 import math
+import threading
+from collections.abc import Mapping
 
 import numpy as np
 from numba import njit
@@ -248,9 +250,48 @@ DATA = {"rotor_stop": rotor_stop_data, "lab_window": lab_window_data}
 #: the methods compiled into a contact's flights beside DOPRI5 (and the exact flow), one
 #: variant each: none, DOP853 (tight tol), RK4 (asked for)
 COMPILED = ((), (METHOD_DOP853,), (METHOD_RK4,))
+
+
+class Lazy(Mapping):
+    """A table whose keys are known at import and whose values are made on first lookup,
+    once (under a lock: blocks run on threads), by ``make(*key)``. Each value is a tree of
+    numba functions; making every system's variants at import (each method, stage and
+    start variant) cost a sweep process more CPU time than loading the one cached kernel
+    it runs (docs/performance.md). Only what a sweep looks up is made."""
+
+    def __init__(self, keys, make):
+        self._keys = tuple(keys)
+        self._known, self._make, self._made = frozenset(self._keys), make, {}
+        self._lock = threading.Lock()
+
+    def __getitem__(self, key):
+        made = self._made.get(key)
+        if made is None:
+            if key not in self._known:
+                raise KeyError(key)
+            with self._lock:
+                made = self._made.get(key)
+                if made is None:
+                    made = self._made[key] = self._make(*key)
+        return made
+
+    def __contains__(self, key):
+        return key in self._known
+
+    def __iter__(self):
+        return iter(self._keys)
+
+    def __len__(self):
+        return len(self._keys)
+
+
+def _contact(model, tool, methods):
+    return getattr(tools, tool)(getattr(models, model.upper()), methods)
+
+
 #: each system's contact (the core's description of it), by the table's names and COMPILED
-CONTACTS = {(s.model, s.tool, methods): getattr(tools, s.tool)(
-    getattr(models, s.model.upper()), methods) for s in SYSTEMS for methods in COMPILED}
+CONTACTS = Lazy(((s.model, s.tool, methods) for s in SYSTEMS for methods in COMPILED),
+                _contact)
 #: a flight's step budget
 MAX_STEPS = 10 ** 6
 #: the first section count at which a sequence may be called not periodic before its
@@ -285,6 +326,14 @@ def _entry_point(name: str, block):
     return namespace[name]
 
 
+def _system_entry_point(system, tangent, methods, two_stage, several_starts):
+    return _entry_point(
+        entry_name(system, tangent, methods, two_stage, several_starts),
+        build_block(system, CONTACTS[system.model, system.tool, methods],
+                    PARAMETERS[system.model], DATA[system.tool], stability=tangent,
+                    methods=methods, two_stage=two_stage, several_starts=several_starts))
+
+
 #: the entry points of each system (a table row) by (system, tangent, methods, two_stage,
 #: several_starts): with the tangent where its multipliers need it (elsewhere they are known
 #: in closed form), with DOP853 or RK4 compiled in beside DOPRI5 (COMPILED: DOP853's code
@@ -292,18 +341,11 @@ def _entry_point(name: str, block):
 #: 4 CPU s of 64), with auto's second stage (about a tenth of the blade
 #: example's first run, whose exact flights never take it), and with several starts (the
 #: search for other starts' cycles is compiled only where a sweep asks for attractors)
-ENTRY_POINTS = {}
-for _system in SYSTEMS:
-    for _methods in COMPILED:
-        _args = (_system, CONTACTS[_system.model, _system.tool, _methods],
-                 PARAMETERS[_system.model], DATA[_system.tool])
-        for _tangent in (False, True) if _system.tangent else (False,):
-            for _two in (False, True):
-                for _several in (False, True):
-                    ENTRY_POINTS[_system, _tangent, _methods, _two, _several] = _entry_point(
-                        entry_name(_system, _tangent, _methods, _two, _several),
-                        build_block(*_args, stability=_tangent, methods=_methods,
-                                    two_stage=_two, several_starts=_several))
+ENTRY_POINTS = Lazy(((system, tangent, methods, two, several) for system in SYSTEMS
+                     for methods in COMPILED
+                     for tangent in ((False, True) if system.tangent else (False,))
+                     for two in (False, True) for several in (False, True)),
+                    _system_entry_point)
 
 
 def entry_point(system, method, tangent=False, two_stage=False, starts=1):
