@@ -42,6 +42,7 @@ def _planted(x, n):
 def main(examples):
     import numpy as np
 
+    from kernels.impact.runge_kutta import METHOD_DOPRI5
     from kernels.pendulum import systems
     from kernels.pendulum.table import BY_CODES
     from kernels.pendulum.cases import C, N_ROW
@@ -56,8 +57,8 @@ def main(examples):
     rows, log = np.empty((1, N_ROW)), np.empty((4, 2))
     # one case, two starts: the plain and the tangent-carrying paths of the driver
     system = BY_CODES[1, 1]  # the rigid model on the blade
-    systems.rigid_on_lab_window_tangent(
-        cases, systems.settings_for(system, 1, 1e-6, 1e-9, 0.01, 5, 2), rows,
+    systems.entry_point(system, METHOD_DOPRI5, tangent=True)(
+        cases, systems.settings_for(system, METHOD_DOPRI5, 1e-6, 1e-9, 0.01, 5, 2), rows,
         np.empty_like(rows), log)
     print(json.dumps([calls for calls in compiled.values() if len(calls) > 1]))
 

@@ -102,7 +102,9 @@ def test_numba_cache_is_keyed_by_each_modules_import_closure(tmp_path):
     import numba
 
     from kernels import cache
+    from kernels.impact.runge_kutta import METHOD_DOPRI5
     from kernels.pendulum import distinct, systems
+    from kernels.pendulum.table import BY_CODES
 
     closure = cache.import_closure(KERNELS / "rotary_pendulum.py")
     names = {str(p.relative_to(KERNELS.parent)) for p in closure}
@@ -132,7 +134,8 @@ def test_numba_cache_is_keyed_by_each_modules_import_closure(tmp_path):
     assert after_core["pendulum/systems.py"] != after_balancer["pendulum/systems.py"]
     assert after_core["balancer.py"] == after_balancer["balancer.py"]
     # and numba uses it for every cached kernel
-    for kernel in (systems.rigid_on_lab_window, distinct.row_hashes):
+    rigid_on_blade = systems.entry_point(BY_CODES[1, 1], METHOD_DOPRI5)
+    for kernel in (rigid_on_blade, distinct.row_hashes):
         locator = kernel._cache._impl._locator
         assert isinstance(locator, cache.ImportClosureLocator)
         assert locator.get_source_stamp() == cache.stamp(kernel.py_func.__code__.co_filename)
