@@ -36,14 +36,15 @@ def candidates(tol):
 
 def against_one_solve(params, ref, tol):
     """auto against one DOPRI5 solve from rest at auto's finer rtol, the accuracy auto
-    delivers: right-hand sides (deterministic) and CPU time (median of interleaved rounds),
+    delivers: right-hand sides (deterministic) and CPU time (median of 41 interleaved pairs),
     and the worst errors of both against the reference."""
     finer = accuracy.AUTO_COARSE * accuracy.auto_rtol(tol) / accuracy.AUTO_REFINE
     one = dict(integrator="dopri5", rtol=finer, atol_per_rtol=accuracy.AUTO_ATOL_PER_RTOL)
     out, _ = run(params, "auto", tol=tol)
     single, _ = run(params, **one)
+    # runs of a few milliseconds each: many pairs, or the median moves by 10 % between runs
     t_auto, t_one = paired_cpu_times(lambda: run(params, "auto", tol=tol),
-                                     lambda: run(params, **one))
+                                     lambda: run(params, **one), repeats=41)
     return {"one_solve": f"dopri5 rtol {finer:.2g}",
             "auto_over_one_evaluations": cost(out, "dopri5") / cost(single, "dopri5"),
             "auto_over_one_cpu": t_auto / t_one,
