@@ -42,7 +42,7 @@ def against_one_solve(params, ref, tol):
     one = dict(integrator="dopri5", rtol=finer, atol_per_rtol=accuracy.AUTO_ATOL_PER_RTOL)
     out, _ = run(params, "auto", tol=tol)
     single, _ = run(params, **one)
-    # runs of a few milliseconds each: many pairs, or the median moves by 10 % between runs
+    # runs of a few milliseconds each: with few pairs the median is the machine's noise
     t_auto, t_one = paired_cpu_times(lambda: run(params, "auto", tol=tol),
                                      lambda: run(params, **one), repeats=41)
     return {"one_solve": f"dopri5 rtol {finer:.2g}",
