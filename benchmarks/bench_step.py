@@ -5,6 +5,11 @@ flights with everything around them, in one run:
 
 - ``numba scalar``: the kernel's own step (``kernels.impact.runge_kutta``) and controller,
   one design after another;
+- ``numba, 8 lanes, <sine> and <power>``: the same step and controller (the kernel's code,
+  inlined) for 8 designs at once, laid out lane-minor in one flat buffer as the C SIMD loop
+  is, each lane with its own step size; with libm's sine and pow (called: the loop stays
+  scalar), with the kernels' branch-free sine (``elementary.sincos_lane``), and with it
+  and the branch-free power in the controller (``elementary.power_lane``), no fastmath;
 - ``C scalar``: the same loop in C (benchmarks/c/rigid_dopri5.c), gcc -O3 -march=native;
 - ``C SIMD``: 8 designs at once, each lane with its own step size, retiring at the end of
   its interval, with glibc's vector sine (gcc -O3 -march=native -ffast-math -fopenmp-simd);
@@ -13,8 +18,9 @@ flights with everything around them, in one run:
   rtol, through the sweep's kernel: events located and polished, impacts, slides, sections
   and the peak, per step the kernel counts (accepted and rejected, its ``n_steps``).
 
-The first three take the same steps (the counts are checked) and reach the same states (the
-C checksums within 1e-9 of the kernel's). CPU time (the C programs time their loops on
+The numba and C loops take the same steps (the counts are checked) and reach the same
+states (checksums within 1e-9 of the kernel's; the lanes with libm's sine and pow give the
+kernel's bits, design by design). CPU time (the C programs time their loops on
 their own process's CPU clock), interleaved rounds, the median of each.
 
 Run: .venv/bin/python benchmarks/bench_step.py [--rounds N]
@@ -89,6 +95,82 @@ def kernel_loop():
     return run
 
 
+#: the lane loops' sine and power: (label, sine, power), each "libm" or "lane" (branch-free)
+LANE_VARIANTS = (("libm's sine and pow", "libm", "libm"),
+                 ("branch-free sine, libm's pow", "lane", "libm"),
+                 ("branch-free sine and pow", "lane", "lane"))
+LANES = 8
+
+
+def lane_loop(sine: str, power: str):
+    """``run(w2s, vs, t_end, out) -> steps``: kernel_loop's flights 8 at a time, the
+    kernel's step and step-size rule inlined into one loop over the lanes of a flat
+    lane-minor buffer (field * LANES + lane), each lane accepting, rejecting and retiring
+    on its own. With libm's sine and pow, the same operations per design as kernel_loop's
+    (its bits); the branch-free ones differ from libm's in the last bits."""
+    import math
+
+    from numba import njit
+
+    from kernels import INLINE_OPTIONS, elementary
+    from kernels.impact import runge_kutta
+    from kernels.impact.runge_kutta import METHOD_DOPRI5, make_step_size_rule, make_stepper
+    from kernels.impact.tuples import relative_scales
+
+    if sine == "lane":
+        sin = njit(**INLINE_OPTIONS)(lambda x: elementary.sincos_lane(x)[0])
+    else:
+        sin = njit(**INLINE_OPTIONS)(lambda x: math.sin(x))
+
+    @njit(**INLINE_OPTIONS)
+    def rhs(y, p):  # the kernel's rigid_rhs with the sine chosen
+        k, kappa = p
+        return (y[1], -kappa * k * sin(y[0]))
+
+    step = make_stepper(rhs, relative_scales, methods=(), inline=True)
+    next_step = make_step_size_rule(
+        elementary.power_lane if power == "lane" else runge_kutta.libm_power, inline=True)
+    W2, Y0, Y1, ACC, T0, H, PREV, REJECTED = (field * LANES for field in range(8))
+
+    @njit(error_model="numpy")
+    def run(w2s, vs, t_end, out):
+        n, steps = w2s.shape[0], 0
+        buf = np.empty(8 * LANES)
+        for base in range(0, n, LANES):
+            for lane in range(LANES):  # a block's last lanes repeat its last design
+                i = min(base + lane, n - 1)
+                buf[W2 + lane], buf[Y0 + lane], buf[Y1 + lane] = w2s[i], 0.0, vs[i]
+                buf[ACC + lane], buf[T0 + lane], buf[H + lane] = 0.0, 0.0, 0.01
+                buf[PREV + lane], buf[REJECTED + lane] = 1.0, 0.0
+            running = LANES
+            while running:
+                running = 0
+                for lane in range(LANES):  # vectorised by LLVM: every branch a select
+                    y = (buf[Y0 + lane], buf[Y1 + lane])
+                    t, h, prev = buf[T0 + lane], buf[H + lane], buf[PREV + lane]
+                    live = t < t_end
+                    h = t_end - t if t + h > t_end else h
+                    y1, f1, err = step(METHOD_DOPRI5, y, (y[1], buf[ACC + lane]), h,
+                                       (1.0, buf[W2 + lane]), RTOL, ATOL)
+                    accept = live and err <= 1.0
+                    after_reject = buf[REJECTED + lane] != 0.0 or not accept
+                    h_next = next_step(METHOD_DOPRI5, h, err, after_reject, prev)
+                    buf[T0 + lane] = t + h if accept else t
+                    buf[Y0 + lane] = y1[0] if accept else y[0]
+                    buf[Y1 + lane] = y1[1] if accept else y[1]
+                    buf[ACC + lane] = f1[1] if accept else buf[ACC + lane]
+                    buf[PREV + lane] = err if accept else prev
+                    buf[REJECTED + lane] = (0.0 if accept else 1.0) if live else 1.0
+                    buf[H + lane] = h_next if live else buf[H + lane]
+                    steps += 1 if live else 0
+                    running += 1 if live and (t + h < t_end if accept else True) else 0
+            for lane in range(min(LANES, n - base)):
+                out[base + lane] = buf[Y0 + lane] + buf[Y1 + lane]
+        return steps
+
+    return run
+
+
 def integrated_flights(example: str):
     """``run() -> steps``: the example's designs (its grid, regime outputs only) to their
     steady states by the sweep's kernel under DOPRI5 at RTOL, ATOL."""
@@ -151,6 +233,11 @@ def main() -> None:
     loop = kernel_loop()
     out = np.empty(N)
     loops = {"numba scalar": lambda: loop(w2, v, T, out)}
+    lane_outs = {}
+    for label, sine, power in LANE_VARIANTS:
+        lanes, lane_outs[label] = lane_loop(sine, power), np.empty(N)
+        loops[f"numba, {LANES} lanes, {label}"] = (
+            lambda lanes=lanes, o=lane_outs[label]: lanes(w2, v, T, o))
     for example in FLIGHT_EXAMPLES:
         loops[f"integrated flight, {example}"] = integrated_flights(example)
     for run in loops.values():
@@ -164,6 +251,16 @@ def main() -> None:
                 counts[label], ns = cpu_ns_per_step(run)
                 samples[label].append(ns)
             checksum = float(out.sum())
+            for label, lane_out in lane_outs.items():
+                key = f"numba, {LANES} lanes, {label}"
+                lane_sum = float(lane_out.sum())
+                if (counts[key] != counts["numba scalar"]
+                        or abs(lane_sum - checksum) > 1e-9 * abs(checksum)
+                        or (label == LANE_VARIANTS[0][0]
+                            and not np.array_equal(lane_out, out))):
+                    raise SystemExit(f"bench_step: {key} took {counts[key]} steps to "
+                                     f"{lane_sum!r}, the kernel {counts['numba scalar']} "
+                                     f"to {checksum!r}")
             for name, label in (("c_scalar", "C scalar"), ("c_simd", "C SIMD")):
                 c_steps, ns, c_sum = c_loops(built)[name]
                 if (c_steps != counts["numba scalar"]

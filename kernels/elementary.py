@@ -8,13 +8,20 @@ approximation on |x| <= tan(pi/8) (Moshier's Cephes scheme), accurate to ~2 ulp
 ``sincos_quadrant`` gives sin and cos of one argument in [0, pi/2] from one reduction
 (the half period's quadrature needs both at every node), within an ulp of libm
 (tests/test_elementary.py).
+
+``sincos_lane`` and ``power_lane`` are written without a call or a branch, so that a loop
+of them over lanes laid out lane-minor is vectorised by LLVM, which libm's sin, cos and
+pow are not (numba from PyPI has no vector math library): the integrator's step and its
+step-size control in lanes (benchmarks/bench_step.py).
 """
 
 import math
 
-from numba import njit
+import numpy as np
+from numba import njit, types
+from numba.extending import intrinsic, overload
 
-from kernels import KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, KERNEL_OPTIONS
 
 _P0, _P1, _P2 = -8.750608600031904122785e-01, -1.615753718733365076637e01, -7.500855792314704667340e01
 _P3, _P4 = -1.228866684490136173410e02, -6.485021904942025371773e01
@@ -63,6 +70,26 @@ def atan2_fast(y, x):
     return a
 
 
+def horner(x, coefficients):
+    """coefficients[0] x^(n-1) + ... + coefficients[n-1] by Horner's rule; in numba
+    written out for the tuple's length (a loop over the coefficients kept a loop over
+    lanes from vectorising)."""
+    result = coefficients[0]
+    for c in coefficients[1:]:
+        result = result * x + c
+    return result
+
+
+@overload(horner, inline="always")
+def _horner(x, coefficients):
+    body = "coefficients[0]"
+    for i in range(1, coefficients.count):
+        body = f"({body}) * x + coefficients[{i}]"
+    namespace = {}
+    exec(f"def horner(x, coefficients):\n    return {body}\n", namespace)
+    return namespace["horner"]
+
+
 # sin and cos on [-pi/4, pi/4] (Moshier's Cephes coefficients):
 # sin x = x + x^3 S(x^2), cos x = 1 - x^2/2 + x^4 C(x^2)
 _SIN = (1.58962301576546568060e-10, -2.50507477628578072866e-8, 2.75573136213857245213e-6,
@@ -74,13 +101,11 @@ _COS = (-1.13585365213876817300e-11, 2.08757008419747316778e-9, -2.7557314179296
 _PIO2_HI, _PIO2_LO = 1.5707963267948966, 6.123233995736766e-17
 
 
-@njit(**KERNEL_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _sin_cos_reduced(x):
+    """sin x and cos x for |x| <= pi/4: Cephes' polynomials."""
     z = x * x
-    s = c = 0.0
-    for j in range(6):
-        s = s * z + _SIN[j]
-        c = c * z + _COS[j]
+    s, c = horner(z, _SIN), horner(z, _COS)
     return x + x * z * s, 1.0 - 0.5 * z + z * z * c
 
 
@@ -94,6 +119,101 @@ def sincos_quadrant(x):
         s, c = _sin_cos_reduced(y)
         return c, s
     return _sin_cos_reduced(x)
+
+
+# pi/2 in three parts for Cody and Waite's reduction: the first two with 27 significant
+# bits, so that n times each is exact for |n| < 2^26 (Cephes' DP1..DP3, doubled)
+_PIO2_A, _PIO2_B, _PIO2_C = 1.5707962512969970703125, 7.549789415861596353352e-8, \
+    5.390302858158119052953e-15
+_TWO_OVER_PI = 0.6366197723675814
+
+
+@njit(**INLINE_OPTIONS)
+def sincos_lane(x):
+    """(sin x, cos x) for finite x (|x| < 1e7; NaN for NaN or inf) without a call or a
+    branch: x = n pi/2 + r by Cody and Waite's reduction in three parts, |r| <= pi/4,
+    sin r and cos r by _sin_cos_reduced, and the pair rotated by n quarter turns with
+    selects. Odd and even exactly (reduced from |x|). Within 2 ulp of libm
+    (tests/test_elementary.py)."""
+    a = abs(x)
+    n = np.floor(a * _TWO_OVER_PI + 0.5)  # a float (math.floor's is an int)
+    r = ((a - n * _PIO2_A) - n * _PIO2_B) - n * _PIO2_C
+    sr, cr = _sin_cos_reduced(r)
+    quarter = n - 4.0 * np.floor(0.25 * n)  # n mod 4
+    odd = (quarter == 1.0) | (quarter == 3.0)
+    s = cr if odd else sr
+    c = sr if odd else cr
+    s = -s if quarter >= 2.0 else s
+    c = -c if (quarter == 1.0) | (quarter == 2.0) else c
+    return (-s if x < 0.0 else s), c
+
+
+def _bitcast(source, target):
+    """An intrinsic reading a ``source`` value's IEEE bits as a ``target`` (an LLVM
+    bitcast: no memory, no call, so it vectorises)."""
+
+    @intrinsic
+    def bitcast(typingctx, x):
+        if x != source:
+            return None
+
+        def codegen(context, builder, signature, args):
+            return builder.bitcast(args[0], context.get_value_type(target))
+        return target(source), codegen
+    return bitcast
+
+
+_float_bits = _bitcast(types.float64, types.int64)
+_bits_float = _bitcast(types.int64, types.float64)
+
+
+_MANTISSA = (1 << 52) - 1
+_ONE_EXPONENT = 1023 << 52  # the exponent field of 1.0
+_TWO_52_EXPONENT = 0x4330000000000000  # of 2^52: an integer in the mantissa is 2^52 + n
+_ROUNDING = 6755399441055744.0  # 1.5 * 2^52: x + it - it rounds x to an integer
+_LN2_HI, _LN2_LO = 6.93147180369123816490e-01, 1.90821492927058770002e-10  # fdlibm's
+_INV_LN2 = 1.4426950408889634
+#: 1/19, 1/17, ..., 1/3: 2 atanh s = 2 s (1 + z/3 + z^2/5 + ...), z = s^2
+_ATANH_SERIES = tuple(1.0 / k for k in range(19, 2, -2))
+#: 1/13!, 1/12!, ..., 1/2!: e^r = 1 + r + r^2 (1/2! + r/3! + ...)
+_EXP_SERIES = tuple(1.0 / math.factorial(k) for k in range(13, 1, -1))
+
+
+@njit(**INLINE_OPTIONS)
+def _log_lane(x):
+    """ln x for normal x > 0: x = m 2^e from the bits, m in [sqrt(1/2), sqrt(2)), and
+    ln m = 2 atanh s, s = (m - 1)/(m + 1), |s| <= 0.172, by its series to s^19 (the
+    next term is below 0.2 ulp; without the s^19 term the error reached 6.5 ulp)."""
+    bits = _float_bits(x)
+    m = _bits_float((bits & _MANTISSA) | _ONE_EXPONENT)
+    e = _bits_float((bits >> 52) | _TWO_52_EXPONENT) - (4503599627370496.0 + 1023.0)
+    high = m > 1.4142135623730951
+    m = 0.5 * m if high else m
+    e = e + 1.0 if high else e
+    s = (m - 1.0) / (m + 1.0)
+    z = s * s
+    p = horner(z, _ATANH_SERIES)
+    return e * _LN2_HI + (2.0 * s + (2.0 * s * z * p + e * _LN2_LO))
+
+
+@njit(**INLINE_OPTIONS)
+def _exp_lane(y):
+    """e^y for |y| < 700: y = k ln 2 + r, |r| <= ln(2)/2, e^r by its Taylor series to
+    r^13 (without that term the error reached 2 ulp), times 2^k built from its bits (k
+    read off the rounding's mantissa)."""
+    t = y * _INV_LN2 + _ROUNDING
+    k = t - _ROUNDING
+    r = (y - k * _LN2_HI) - k * _LN2_LO
+    p = horner(r, _EXP_SERIES)
+    return (1.0 + (r + r * r * p)) * _bits_float((_float_bits(t) + 1023) << 52)
+
+
+@njit(**INLINE_OPTIONS)
+def power_lane(x, a):
+    """x^a for normal x > 0 and |a ln x| < 700 without a call or a branch (the step-size
+    controller's err^-0.2 and its kind, in lanes): e^(a ln x), within about 10 ulp of
+    libm's pow there (tests/test_elementary.py), the error of e^y growing with |y|."""
+    return _exp_lane(a * _log_lane(x))
 
 
 #: the Maclaurin series of sn, cn, dn serve up to this |u| sqrt(max(1, m)): the first term

@@ -174,6 +174,50 @@ def test_embedded_error_measure_has_the_order_of_the_step_it_controls(method, or
     assert np.all(np.array(measured) > np.array(true)), (measured, true)
 
 
+@pytest.mark.parametrize("method", ["dopri5", "dop853"])
+def test_step_and_its_control_inlined_over_lanes_give_the_called_bits(method):
+    """make_stepper(inline=True) and make_step_size_rule(inline=True), inlined into one
+    loop over 8 lanes of a flat lane-minor buffer (as benchmarks/bench_step.py's lanes),
+    give each lane the bits of the step and control called one design at a time: the
+    rigid pendulum from random states, step sizes, parameters and errors before, accepted
+    and rejected steps among them."""
+    from kernels.impact.runge_kutta import (libm_power, make_step_size_rule, next_step)
+    from kernels.pendulum.models import rigid_rhs
+
+    code = settings(method).method
+    called = make_stepper(rigid_rhs, relative_scales)
+    inlined = make_stepper(rigid_rhs, relative_scales, inline=True)
+    rule = make_step_size_rule(libm_power, inline=True)
+
+    def make_loop(step, control):
+        @njit(error_model="numpy")
+        def loop(buf, code):
+            for lane in range(8):
+                y = (buf[lane], buf[8 + lane])
+                p = (1.0, buf[16 + lane])
+                y1, f1, err = step(code, y, rigid_rhs(y, p), buf[24 + lane], p, 1e-6, 1e-9)
+                buf[40 + lane], buf[48 + lane], buf[56 + lane] = y1[0], y1[1], f1[1]
+                buf[64 + lane] = control(code, buf[24 + lane], err, buf[72 + lane] != 0.0,
+                                         buf[32 + lane])
+        return loop
+
+    lanes, one_by_one = make_loop(inlined, rule), make_loop(called, next_step)
+
+    rng = np.random.default_rng(5)
+    shrank = grew = 0
+    for _ in range(20):
+        buf = np.zeros(80)
+        buf[:8], buf[8:16] = rng.uniform(-4, 4, 8), rng.uniform(-3, 3, 8)
+        buf[16:24], buf[24:32] = rng.uniform(0.5, 3, 8), 10 ** rng.uniform(-3, 0, 8)
+        buf[32:40], buf[72:80] = 10 ** rng.uniform(-6, 1, 8), rng.integers(0, 2, 8)
+        a, b = buf.copy(), buf.copy()
+        lanes(a, code), one_by_one(b, code)
+        assert np.array_equal(a, b)
+        shrank += np.sum(a[64:72] < a[24:32])
+        grew += np.sum(a[64:72] > a[24:32])
+    assert shrank >= 5 and grew >= 5, (shrank, grew)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("level", [0.9, 0.3, -0.5, -0.99])
 def test_event_time_matches_the_analytic_crossing(level):

@@ -87,18 +87,22 @@ def _no_exact(y, h, p):
     return y
 
 
-def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS):
+def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS, inline=False):
     """The step of the methods, specialised to rhs, the error scales and, where the system
     has one, its exact flow ``exact(y, h, p)`` (its error estimate is 0); a system without
     one takes DOPRI5's step for METHOD_EXACT (the rule at METHOD_EXACT). DOPRI5 is always
     compiled in, DOP853 and RK4 where ``methods`` has them: without DOP853 its callers step
     by DOPRI5 (``low_order``); without RK4 they never ask for it (a pendulum system's entry
-    point is chosen by its method, systems.entry_point)."""
+    point is chosen by its method, systems.entry_point). With ``inline`` the step and its
+    stages are inlined into their caller (numba's IR): a loop of steps over several
+    flights laid out lane-minor is then vectorised by LLVM (benchmarks/bench_step.py), with
+    the same operations as the step called."""
+    options = INLINE_OPTIONS if inline else INNER_OPTIONS
     has_exact = exact is not None
     exact = exact if has_exact else _no_exact
     high_order, fixed_step = METHOD_DOP853 in methods, METHOD_RK4 in methods
 
-    @njit(**INNER_OPTIONS)
+    @njit(**options)
     def dopri5(y, f0, h, p):
         k1 = f0
         k2 = rhs(lincomb(y, h, (A21,), (k1,)), p)
@@ -111,7 +115,7 @@ def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS):
         err = weighted(h, (E1, E3, E4, E5, E6, E7), (k1, k3, k4, k5, k6, k7))
         return y1, k7, err
 
-    @njit(**INNER_OPTIONS)
+    @njit(**options)
     def dop853(y, f0, h, p):
         k1 = f0
         k2 = rhs(lincomb(y, h, D_A2, (k1,)), p)
@@ -129,7 +133,7 @@ def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS):
         y1 = lincomb(y, h, D_B, ks)
         return y1, rhs(y1, p), weighted(h, D_E5, ks), weighted(h, D_E3, ks)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**options)
     def rk4(y, f0, h, p):
         k2 = rhs(lincomb(y, h, (0.5,), (f0,)), p)
         k3 = rhs(lincomb(y, h, (0.5,), (k2,)), p)
@@ -137,7 +141,7 @@ def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS):
         y1 = lincomb(y, h / 6.0, (1.0, 2.0, 2.0, 1.0), (f0, k2, k3, k4))
         return y1, rhs(y1, p)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**options)
     def step(method, y, f0, h, p, rtol, atol):
         if has_exact and method == METHOD_EXACT:
             y1 = exact(y, h, p)
@@ -185,20 +189,36 @@ def initial_step(method, dt, speed, rtol):
     return min(0.1, max(rtol, 1e-14) ** (1.0 / order) / max(1.0, abs(speed)))
 
 
-@njit(**INNER_OPTIONS)
-def next_step(method, h, err, after_reject, err_prev):
-    """Step-size control. DOPRI5: the PI controller 0.9 err^-0.17 err_prev^0.04 (Hairer's
-    DOPRI5 with beta = 0.04; it damps the accept/reject see-saw where the step must keep
-    shrinking), within [0.2, 5]; after a rejection only 0.9 err^(-1/5) and no growth
-    (Hairer-Norsett-Wanner II.4). DOP853: 0.9 err^(-1/8) within [1/3, 6], no growth after
-    a rejection (Hairer's DOP853, beta = 0)."""
-    if method == METHOD_DOP853:
-        factor = max(1.0 / 3.0, 0.9 * max(err, 1e-10) ** -0.125)
-        return h * min(1.0 if after_reject or err > 1.0 else 6.0, factor)
-    if after_reject or err > 1.0:
-        return h * min(1.0, max(0.2, 0.9 * max(err, 1e-10) ** -0.2))
-    factor = 0.9 * max(err, 1e-10) ** -0.17 * max(err_prev, 1e-4) ** 0.04
-    return h * min(5.0, max(0.2, factor))
+def make_step_size_rule(power, inline=False):
+    """The step-size control ``next_step(method, h, err, after_reject, err_prev) -> h``
+    with err^a computed as ``power(err, a)``. DOPRI5: the PI controller 0.9 err^-0.17
+    err_prev^0.04 (Hairer's DOPRI5 with beta = 0.04; it damps the accept/reject see-saw
+    where the step must keep shrinking), within [0.2, 5]; after a rejection only 0.9
+    err^(-1/5) and no growth (Hairer-Norsett-Wanner II.4). DOP853: 0.9 err^(-1/8) within
+    [1/3, 6], no growth after a rejection (Hairer's DOP853, beta = 0). With ``inline`` it
+    is inlined into its caller, for a loop over lanes (benchmarks/bench_step.py)."""
+
+    @njit(**(INLINE_OPTIONS if inline else INNER_OPTIONS))
+    def next_step(method, h, err, after_reject, err_prev):
+        if method == METHOD_DOP853:
+            factor = max(1.0 / 3.0, 0.9 * power(max(err, 1e-10), -0.125))
+            return h * min(1.0 if after_reject or err > 1.0 else 6.0, factor)
+        if after_reject or err > 1.0:
+            return h * min(1.0, max(0.2, 0.9 * power(max(err, 1e-10), -0.2)))
+        factor = 0.9 * power(max(err, 1e-10), -0.17) * power(max(err_prev, 1e-4), 0.04)
+        return h * min(5.0, max(0.2, factor))
+
+    return next_step
+
+
+@njit(**INLINE_OPTIONS)
+def libm_power(x, a):
+    """x^a by the platform's pow (the kernels' step-size control)."""
+    return x ** a
+
+
+#: the kernels' step-size control (make_step_size_rule), err^a by libm's pow
+next_step = make_step_size_rule(libm_power)
 
 
 @njit(**INNER_OPTIONS)
