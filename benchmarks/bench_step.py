@@ -10,6 +10,9 @@ flights with everything around them, in one run:
   is, each lane with its own step size; with libm's sine and pow (called: the loop stays
   scalar), with the kernels' branch-free sine (``elementary.sincos_lane``), and with it
   and the branch-free power in the controller (``elementary.power_lane``), no fastmath;
+- ``numba scalar, the rotor model's step``: the kernel's step of the rotor model (the
+  stability example's) and its controller alone, one design after another: what of the
+  integrated flights below is the step;
 - ``C scalar``: the same loop in C (benchmarks/c/rigid_dopri5.c), gcc -O3 -march=native;
 - ``C SIMD``: 8 designs at once, each lane with its own step size, retiring at the end of
   its interval, with glibc's vector sine (gcc -O3 -march=native -ffast-math -fopenmp-simd);
@@ -61,21 +64,40 @@ def designs(n=N):
     return w2, (0.3 + 0.6 * np.fmod(x * 7.0, 1.0)) * 2.0 * np.sqrt(w2)
 
 
-def kernel_loop():
+def kernel_loop(model: str = "rigid"):
+    """``run(w2s, vs, t_end, out) -> steps``: the kernel's DOPRI5 step and controller, one
+    design after another. ``rigid``: the rigid pendulum, Omega^2 = w2, launched at v (as
+    the C). ``rotor``: the rotor model's step (P9-P10, its own error scales) with k = w2,
+    the pendulum launched at v from a rotor turning at its idle speed (xi 0.3, rotor
+    inertia 60, motor slope 20): the step the stability example's flights take."""
     from numba import njit
 
+    from kernels import INLINE_OPTIONS
     from kernels.impact.runge_kutta import METHOD_DOPRI5, make_stepper, next_step
     from kernels.impact.tuples import relative_scales
-    from kernels.pendulum.models import rigid_rhs
+    from kernels.pendulum.models import rigid_rhs, rotor_rhs, rotor_scales
 
-    step = make_stepper(rigid_rhs, relative_scales)
+    if model == "rotor":
+        rhs, scales = rotor_rhs, rotor_scales
+
+        @njit(**INLINE_OPTIONS)
+        def start(w2, v):  # (phi1, phi1', psi, psi'), (k, xi, j1, slope, idle)
+            return (0.0, 1.0, 0.0, v), (w2, 0.3, 60.0, 20.0, 1.0)
+    else:
+        rhs, scales = rigid_rhs, relative_scales
+
+        @njit(**INLINE_OPTIONS)
+        def start(w2, v):  # (psi, psi'), (k, kappa): Omega^2 = kappa k
+            return (0.0, v), (1.0, w2)
+
+    step = make_stepper(rhs, scales)
 
     @njit(error_model="numpy")  # as the kernels
     def run(w2s, vs, t_end, out):
         steps = 0
         for i in range(w2s.shape[0]):
-            p = (1.0, w2s[i])  # (k, kappa): Omega^2 = kappa k
-            y, f = (0.0, vs[i]), (vs[i], 0.0)
+            y, p = start(w2s[i], vs[i])
+            f = rhs(y, p)
             t, h, prev, rejected = 0.0, 0.01, 1.0, False
             while t < t_end:
                 if t + h > t_end:
@@ -89,7 +111,7 @@ def kernel_loop():
                 else:
                     h = next_step(METHOD_DOPRI5, h, err, True, prev)
                     rejected = True
-            out[i] = y[0] + y[1]
+            out[i] = y[-2] + y[-1]
         return steps
 
     return run
@@ -232,7 +254,9 @@ def main() -> None:
     w2, v = designs()
     loop = kernel_loop()
     out = np.empty(N)
-    loops = {"numba scalar": lambda: loop(w2, v, T, out)}
+    rotor, rotor_out = kernel_loop("rotor"), np.empty(N)
+    loops = {"numba scalar": lambda: loop(w2, v, T, out),
+             "numba scalar, the rotor model's step": lambda: rotor(w2, v, T, rotor_out)}
     lane_outs = {}
     for label, sine, power in LANE_VARIANTS:
         lanes, lane_outs[label] = lane_loop(sine, power), np.empty(N)
