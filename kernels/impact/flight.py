@@ -276,10 +276,10 @@ def make_turning_angle(monitor, step):
             ys, fs, _ = step(settings.method, y, f, s, p, 1.0, 1.0)
             angle, rate, accel = monitor(t + s, ys, fs)
             if accel == 0.0:
-                break
+                return angle
             s_new = min(h, max(0.0, s - rate / accel))
-            if abs(s_new - s) <= 1e-15 * h:
-                break
+            if abs(s_new - s) <= 1e-15 * h:  # converged: the angle at s is the answer
+                return angle
             s = s_new
         ys, fs, _ = step(settings.method, y, f, s, p, 1.0, 1.0)
         return monitor(t + s, ys, fs)[0]
