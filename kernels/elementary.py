@@ -23,12 +23,36 @@ from numba.extending import intrinsic, overload
 
 from kernels import INLINE_OPTIONS, KERNEL_OPTIONS
 
-_P0, _P1, _P2 = -8.750608600031904122785e-01, -1.615753718733365076637e01, -7.500855792314704667340e01
-_P3, _P4 = -1.228866684490136173410e02, -6.485021904942025371773e01
-_Q0, _Q1, _Q2 = 2.485846490142306297962e01, 1.650270098316988542046e02, 4.328810604912902668951e02
-_Q3, _Q4 = 4.853903996359136964868e02, 1.945506571482613964425e02
+# arctan x = x + x z P(z) / Q(z), z = x^2, on |x| <= tan(pi/8) (Moshier's Cephes coefficients;
+# Q monic)
+_ATAN_P = (-8.750608600031904122785e-01, -1.615753718733365076637e01,
+           -7.500855792314704667340e01, -1.228866684490136173410e02,
+           -6.485021904942025371773e01)
+_ATAN_Q = (1.0, 2.485846490142306297962e01, 1.650270098316988542046e02,
+           4.328810604912902668951e02, 4.853903996359136964868e02,
+           1.945506571482613964425e02)
 _TAN_3PI_8 = 2.41421356237309504880
 _MOREBITS = 6.123233995736765886130e-17  # pi/2 - float(pi/2)
+
+
+def horner(x, coefficients):
+    """coefficients[0] x^(n-1) + ... + coefficients[n-1] by Horner's rule; in numba
+    written out for the tuple's length (a loop over the coefficients kept a loop over
+    lanes from vectorising)."""
+    result = coefficients[0]
+    for c in coefficients[1:]:
+        result = result * x + c
+    return result
+
+
+@overload(horner, inline="always")
+def _horner(x, coefficients):
+    body = "coefficients[0]"
+    for i in range(1, coefficients.count):
+        body = f"({body}) * x + coefficients[{i}]"
+    namespace = {}
+    exec(f"def horner(x, coefficients):\n    return {body}\n", namespace)
+    return namespace["horner"]
 
 
 @njit(**KERNEL_OPTIONS)
@@ -50,9 +74,7 @@ def atan_fast(x):
         base = 0.0
         extra = 0.0
     z = x * x
-    num = (((_P0 * z + _P1) * z + _P2) * z + _P3) * z + _P4
-    den = ((((z + _Q0) * z + _Q1) * z + _Q2) * z + _Q3) * z + _Q4
-    return sign * (base + (extra + (x + x * z * num / den)))
+    return sign * (base + (extra + (x + x * z * horner(z, _ATAN_P) / horner(z, _ATAN_Q))))
 
 
 @njit(**KERNEL_OPTIONS)
@@ -68,26 +90,6 @@ def atan2_fast(y, x):
     if x < 0.0:
         return a + math.pi if y >= 0.0 else a - math.pi
     return a
-
-
-def horner(x, coefficients):
-    """coefficients[0] x^(n-1) + ... + coefficients[n-1] by Horner's rule; in numba
-    written out for the tuple's length (a loop over the coefficients kept a loop over
-    lanes from vectorising)."""
-    result = coefficients[0]
-    for c in coefficients[1:]:
-        result = result * x + c
-    return result
-
-
-@overload(horner, inline="always")
-def _horner(x, coefficients):
-    body = "coefficients[0]"
-    for i in range(1, coefficients.count):
-        body = f"({body}) * x + coefficients[{i}]"
-    namespace = {}
-    exec(f"def horner(x, coefficients):\n    return {body}\n", namespace)
-    return namespace["horner"]
 
 
 # sin and cos on [-pi/4, pi/4] (Moshier's Cephes coefficients):
