@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from kernels.pendulum import accuracy
 from kernels.pendulum.models import paper_critical_speed
 from sweep import registry
 
@@ -63,6 +64,13 @@ def run(params, integrator="auto", tol=1e-8, rtol=1e-10, dt=0.002, atol_per_rtol
                                 dt=dt, max_impacts=1000, tol=tol)
     out, status, _ = KERNEL.run(params, method)
     return out, status
+
+
+def one_solve(tol):
+    """run's arguments for one DOPRI5 solve from rest at auto's finer rtol for tol (the
+    accuracy auto delivers), the solve auto's price is measured against."""
+    finer = accuracy.AUTO_COARSE * accuracy.auto_rtol(tol) / accuracy.AUTO_REFINE
+    return dict(integrator="dopri5", rtol=finer, atol_per_rtol=accuracy.AUTO_ATOL_PER_RTOL)
 
 
 def errors(out, ref, blade=False):

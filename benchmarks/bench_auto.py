@@ -19,7 +19,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks.auto_cases import OUT, cost, errors, points, run  # noqa: E402
+from benchmarks.auto_cases import OUT, cost, errors, one_solve, points, run  # noqa: E402
 from benchmarks.timing import best_time, paired_cpu_times  # noqa: E402
 from kernels.pendulum import accuracy  # noqa: E402
 
@@ -32,12 +32,6 @@ def candidates(tol):
                    dict(integrator="dopri5", rtol=rtol, atol_per_rtol=atol_per_rtol))
     for dt in 0.4 / 2.0 ** np.arange(10):
         yield f"rk4 dt {dt:.3g}", dict(integrator="rk4", dt=dt)
-
-
-def one_solve(tol):
-    """The single DOPRI5 solve from rest at auto's finer rtol (the accuracy auto delivers)."""
-    finer = accuracy.AUTO_COARSE * accuracy.auto_rtol(tol) / accuracy.AUTO_REFINE
-    return dict(integrator="dopri5", rtol=finer, atol_per_rtol=accuracy.AUTO_ATOL_PER_RTOL)
 
 
 def against_one_solve(params, ref, tol):

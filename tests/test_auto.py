@@ -16,8 +16,8 @@ from kernels import rotary_pendulum as kr
 from kernels.pendulum import accuracy
 from kernels.pendulum.accuracy import AUTO_ACCEPT
 from tests.conftest import flag_words
-from benchmarks.auto_cases import (KERNEL, MECH, OUT, blade_points, cost, errors, points,
-                                   run)
+from benchmarks.auto_cases import (KERNEL, MECH, OUT, blade_points, cost, errors, one_solve,
+                                   points, run)
 
 OK = MECH.status_codes.ok
 
@@ -85,8 +85,9 @@ def test_auto_costs_at_most_1_3_times_one_solve_at_the_accuracy_it_delivers(roto
     cycle), its regimes the same."""
     params, ref = rotor_sweep
     out, status = run(params, "auto", tol=tol)
-    finer = accuracy.AUTO_COARSE * accuracy.auto_rtol(tol) / accuracy.AUTO_REFINE
-    one, one_status = run(params, "dopri5", rtol=finer, atol_per_rtol=accuracy.AUTO_ATOL_PER_RTOL)
+    method = one_solve(tol)
+    finer = method["rtol"]
+    one, one_status = run(params, **method)
     assert np.all(status == OK) and np.all(one_status == OK)
     assert np.all(out[OUT["regime"]] == one[OUT["regime"]])
     assert cost(out, "dopri5") <= 1.3 * cost(one, "dopri5")
