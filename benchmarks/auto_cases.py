@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from kernels.pendulum import accuracy
-from kernels.pendulum.models import paper_critical_speed
+from kernels.pendulum.free_flight import paper_critical_speed
 from sweep import registry
 
 KERNEL = registry.get("rotary_pendulum")

@@ -1,6 +1,7 @@
 """Reference atlases for a redesign: write the atlases of every built-in example and of a
 set of integrator specs (every pendulum model x tool, DOPRI5 and RK4, the stability and
-attractor outputs), then compare two such folders variable by variable.
+attractor outputs) and of machine specs (every on-request output and profile, each law,
+motor and start), then compare two such folders variable by variable.
 
 Run:  .venv/bin/python benchmarks/reference_atlases.py write DIR
       .venv/bin/python benchmarks/reference_atlases.py compare OLD NEW
@@ -76,7 +77,56 @@ def extra_specs() -> dict[str, str]:
                 if method == "dopri5" and model != "rotor" and tool == "rotor_stop":
                     body = body.replace('"multiplier_modulus", "multiplier_angle", ', "")
                 specs[f"{model}_{tool}_{method}"] = body
+    specs.update(_MACHINES)
     return specs
+
+
+#: the impact machine with every on-request output and its profiles, by each law, motor
+#: law and start, a sized flywheel and a load on the rocker
+_MACHINE_OUTPUTS = ('["mean_crank_speed", "speed_fluctuation", "crank_speed_before_blow", '
+                    '"crank_impulse", "motor_power_mean", "motor_torque_rms", "blow_energy", '
+                    '"blow_loss", "capture_loss", "blow_efficiency", "energy_balance_residual",'
+                    ' "revolutions", "n_steps", "dynamic_force_peak_A", "dynamic_force_peak_B",'
+                    ' "dynamic_force_peak_C", "dynamic_force_peak_D", "crank_speed", '
+                    '"crank_acceleration", "motor_torque", "shaft_torque"{extra}]')
+_MACHINES = {
+    "machine_generalized": f"""mechanism = "impact_machine"
+outputs = {_MACHINE_OUTPUTS.format(extra=', "flywheel_for_delta", "flywheel_for_delta_classical"')}
+[grid]
+R = {{start = 0.1, stop = 0.5, num = 5}}
+type = ["a", "b", "c"]
+[fixed]
+largest_link = 2.5
+design_restitution = 0.3
+flywheel_inertia = 2.0
+load_force_x = 200.0
+load_arm = 0.1
+[method]
+profile_points = 24
+peak_samples = 61
+""",
+    "machine_kinematic_rest": f"""mechanism = "impact_machine"
+outputs = {_MACHINE_OUTPUTS.format(extra="")}
+[grid]
+R = {{start = 0.1, stop = 0.5, num = 5}}
+motor_law = ["linear", "constant"]
+[fixed]
+impact_law = "kinematic"
+largest_link = 2.5
+[method]
+start = "rest"
+profile_points = 16
+peak_samples = 41
+""",
+    "machine_sized": """mechanism = "impact_machine"
+[grid]
+R = {start = 0.1, stop = 0.5, num = 4}
+[fixed]
+flywheel_inertia = "for_delta_target"
+[method]
+delta_target = 0.05
+""",
+}
 
 
 def write(folder: Path) -> None:

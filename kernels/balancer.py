@@ -13,11 +13,14 @@ response for each (f, r, eta) is a short sum over harmonics (``response``).
 """
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
-from kernels import KERNEL_OPTIONS
+from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels.block import each_design
+from kernels.cache import module_level
 from kernels.declaration import POSITIVE, Boundary, Mechanism, Output, Quantity
 from kernels.fourbar import closure_vectors, crank_turns_fully, vector_kinematics
 
@@ -418,24 +421,28 @@ def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
     return S.ok
 
 
-@njit(**KERNEL_OPTIONS)
-def balancer_block(params, geometry_index, coef_a, coef_b, lengths, gamma0s, tol, res_tol,
-                   forced, ok_geometry, out, status):
-    out_i = np.empty(out.shape[0])
-    for i in range(params.shape[1]):
-        g = geometry_index[i]
-        if not ok_geometry[g]:
-            for k in range(out.shape[0]):
-                out[k, i] = math.nan
-            status[i] = S.not_assemblable
-            continue
-        n_top = lengths[g]
-        status[i] = response(coef_a[g, :n_top], coef_b[g, :n_top], gamma0s[g],
-                             params[P.f, i], params[P.r, i], params[P.eta, i],
-                             int(params[P.spring_neutral, i]), tol, res_tol,
-                             forced, out_i)
-        for k in range(out.shape[0]):
-            out[k, i] = out_i[k]
+@njit(**INNER_OPTIONS)
+def design(i, pr, settings, out, prof):
+    """One grid point (kernels/block.py): the steady response of its geometry's Fourier
+    coefficients (computed once per geometry of the block, settings.geometry_index[i])."""
+    g = settings.geometry_index[i]
+    if not settings.ok_geometry[g]:
+        return S.not_assemblable
+    n_top = settings.lengths[g]
+    return response(settings.coef_a[g, :n_top], settings.coef_b[g, :n_top],
+                    settings.gamma0s[g], pr[P.f], pr[P.r], pr[P.eta],
+                    int(pr[P.spring_neutral]), settings.tol, settings.res_tol,
+                    settings.forced, out)
+
+
+#: the method's options and the block's geometries (their Fourier coefficients, lengths,
+#: neutral angles, whether each is a crank-rocker, and each design's geometry), by name
+Settings = namedtuple("Settings", ["tol", "res_tol", "forced", "geometry_index", "coef_a",
+                                   "coef_b", "lengths", "gamma0s", "ok_geometry"])
+
+
+#: the block: each design of it by ``design`` (kernels/block.py), cached on disk
+balancer_block = module_level(each_design(design), "balancer_block", globals(), KERNEL_OPTIONS)
 
 
 def run(params, method):
@@ -463,8 +470,10 @@ def run(params, method):
         ok[g] = True
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
-    balancer_block(np.ascontiguousarray(params), index.ravel().astype(np.int64), coef_a,
-                   coef_b, lengths, gamma0s, tol, res_tol, forced, ok, out, status)
+    settings = Settings(tol=float(tol), res_tol=float(res_tol), forced=int(forced),
+                        geometry_index=index.ravel().astype(np.int64), coef_a=coef_a,
+                        coef_b=coef_b, lengths=lengths, gamma0s=gamma0s, ok_geometry=ok)
+    balancer_block(np.ascontiguousarray(params), settings, out, status, np.empty((0, n, 0)))
     # in SI, only where asked for: omega0 = omega/f, c_sp = I_m omega0^2, c = c_sp / r^2,
     # a moment = c times its invariant (docs/models.md §6.3)
     si = bool(set(method.outputs) & set(SI_OUTPUTS))

@@ -15,15 +15,22 @@ both: measured, a rigid-pendulum sweep run after a paper-pendulum one in the sam
 took the paper model's block (15 of 120 random blade designs changed regime). Uids drawn at
 random make the symbols distinct across processes and forks (numba issue #10486).
 
+Third, the cache lives outside the source tree (``cache_dir``): in the virtual environment
+the package runs in, so that a clean of the tree or a fresh checkout of the same code
+installed in the same environment finds it, and its folders are named by each module's
+place in the package, not by where the checkout lies on disk.
+
 ``install()`` must run before any kernel is decorated (numba picks a function's cache
 locator then); kernels/__init__.py calls it.
 """
 
 import hashlib
+import inspect
 import os
 import re
 import secrets
 import shutil
+import sys
 from functools import lru_cache
 from pathlib import Path
 
@@ -116,6 +123,13 @@ class ImportClosureLocator(_USER_LOCATOR):
             return None
         return super().from_function(py_func, py_file)
 
+    @classmethod
+    def get_suitable_cache_subpath(cls, py_file):
+        """The module's folder inside the package (``kernels_pendulum``), not a hash of
+        where the checkout lies: another checkout of the same code shares the cache (the
+        stamp still tells a different file apart)."""
+        return "_".join(Path(py_file).resolve().parent.relative_to(ROOT).parts)
+
 
 class _RandomIds:
     """Function uids for numba's symbol names: random 63-bit numbers, so that code cached by
@@ -129,14 +143,39 @@ class _RandomIds:
         return secrets.randbits(63)
 
 
+def cache_dir() -> Path:
+    """Where compiled kernels are kept: $NUMBA_CACHE_DIR; else inside the virtual
+    environment the package runs in (it outlives a clean of the source tree, and every
+    checkout installed there shares it); else the user's cache folder."""
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return Path(os.environ["NUMBA_CACHE_DIR"])
+    if sys.prefix != sys.base_prefix:
+        return Path(sys.prefix) / "numba-cache"
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / \
+        "impact-sweep" / "numba"
+
+
+def module_level(inner, name: str, namespace: dict, options: dict):
+    """A function ``name`` of the module whose globals are ``namespace``, with the
+    arguments of the numba function ``inner`` (typically a closure of a factory), that
+    calls it: numba caches a module-level function on disk by its name and file, where
+    a closure called from Python is compiled again in every process. ``name`` must say
+    everything that makes ``inner`` what it is (a system, a method, a variant)."""
+    arguments = ", ".join(inspect.signature(inner.py_func).parameters)
+    namespace["_" + name] = inner
+    exec(compile(f"def {name}({arguments}):\n    return _{name}({arguments})\n",
+                 namespace["__file__"], "exec"), namespace)
+    namespace[name] = numba.njit(**options)(namespace[name])
+    return namespace[name]
+
+
 def install() -> None:
-    """Cache under $NUMBA_CACHE_DIR, else kernels/__pycache__, with the closure stamp, and
-    with symbol names unique across processes."""
+    """Cache under cache_dir(), with the closure stamp, and with symbol names unique
+    across processes."""
     if not isinstance(FunctionIdentity._unique_ids, _RandomIds):
         FunctionIdentity._unique_ids = _RandomIds()
-    base = Path(os.environ.get("NUMBA_CACHE_DIR") or Path(__file__).parent / "__pycache__")
-    for old in base.glob("numba-*"):  # the caches of a whole-package hash, before this
-        shutil.rmtree(old, ignore_errors=True)
-    numba.config.CACHE_DIR = str(base)
+    for old in (Path(__file__).parent / "__pycache__").glob("numba-*"):
+        shutil.rmtree(old, ignore_errors=True)  # the caches of a whole-package hash
+    numba.config.CACHE_DIR = str(cache_dir())
     if ImportClosureLocator not in _CACHE_IMPL._locator_classes:
         _CACHE_IMPL._locator_classes.insert(0, ImportClosureLocator)

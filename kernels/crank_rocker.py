@@ -8,27 +8,26 @@ are written by name (``O.gamma``).
 """
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
-from kernels import KERNEL_OPTIONS
+from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels.block import each_design
+from kernels.cache import module_level
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Boundary, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol)
-from kernels.fourbar import (
-    CHANGE_POINT_A,
-    CHANGE_POINT_B,
-    CHANGE_POINT_C,
-    change_point_identities,
-    crank_turns_fully,
-    transmission_angle_half,
-)
+from kernels.fourbar import (CHANGE_POINT_A, CHANGE_POINT_B, CHANGE_POINT_C,
+                             change_point_identities, crank_turns_fully,
+                             transmission_angle_half)
 
 TYPE_A, TYPE_B, TYPE_C, TYPE_GENERAL = 0, 1, 2, 3  # largest rod, rocker, base; any four-bar
 ROOT_SMALLER_BASE, ROOT_LARGER_BASE = 0, 1
 #: a type-b discriminant this far below 0 (relative to its terms) is rounding at the bound
 BOUND_ROUNDING = 64 * 2.220446049250313e-16
-_TYPES = ("a", "b", "c")
+#: the types with a special position by synthesis (the other, "general", given its ratios)
+TYPES = ("a", "b", "c")
 _LINKS = ("largest_link", "lambda0", "lambda2", "lambda3")
 #: the ways each type may be given its geometry ([CR]'s tables are indexed by the
 #: type's largest link under its own name: lambda2 for a, lambda3 for b, lambda0 for c)
@@ -85,9 +84,9 @@ DECLARATION = Mechanism(
                  choices={"a": TYPE_A, "b": TYPE_B, "c": TYPE_C, "general": TYPE_GENERAL}),
         Quantity("R", "1", "physical restitution coefficient of the striker (R); synthesis "
                  "makes Rk = -R", symbol="R", default=0.3, minimum=0.0, maximum=1.0,
-                 min_inclusive=False, max_inclusive=False, used_when={"type": _TYPES}),
+                 min_inclusive=False, max_inclusive=False, used_when={"type": TYPES}),
         Quantity("largest_link", "1", "largest link ratio of the type (lambda2 for a, "
-                 "lambda3 for b, lambda0 for c)", used_when={"type": _TYPES}, **POSITIVE),
+                 "lambda3 for b, lambda0 for c)", used_when={"type": TYPES}, **POSITIVE),
         Quantity("lambda0", "1", "base ratio l0/l1 (lambda0); type b: given instead of "
                  "lambda3; type c: its largest link", symbol="λ0",
                  used_when={"type": ("b", "c", "general")}, **POSITIVE),
@@ -301,16 +300,26 @@ def _given(first, second):
     return second if math.isnan(first) else first
 
 
-@njit(**KERNEL_OPTIONS)
-def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code, tol,
-           envelope, speed_limit, window):
-    """Evaluate one grid point. Returns (status, lambda0, lambda2, lambda3, gamma, Rk,
-    u31 before, u31 after, |u31 before|, impact speed, crank turns fully (0/1), mu on the
-    working stroke, mu opposite, sigma, phi1*, special positions, |Rk| max, envelope, l1,
-    omega1): the outputs of one point.
+#: one linkage: its status (S) and the outputs of the declaration by their names (NaN where
+#: a value does not exist): lambda0..3, gamma, Rk, u31 before and after the node, |u31
+#: before|, the impact speed, whether the crank turns fully (0/1), the transmission angles
+#: on the working stroke and opposite the node, the branch sigma, phi1*, the count of
+#: special positions, |Rk| max, the envelope, l1 and omega1
+LinkagePoint = namedtuple("LinkagePoint", [
+    "status", "lambda0", "lambda2", "lambda3", "gamma", "restitution_kinematic",
+    "transfer_before", "transfer_after", "impact_transfer_ratio", "impact_speed",
+    "crank_turns_fully", "transmission_angle_working", "transmission_angle_opposite",
+    "assembly_branch", "special_crank_angle", "special_position_count",
+    "restitution_kinematic_max", "envelope", "crank_length", "omega1"])
 
-    Works on local scalars and returns everything at once, so the block loop writes each
-    output exactly once; NaN stands for a value that does not exist at this point. ``big``
+
+@njit(**KERNEL_OPTIONS)
+def linkage_point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code, tol,
+                  envelope, speed_limit, window):
+    """Evaluate one linkage: its LinkagePoint.
+
+    Works on local scalars and returns everything at once; NaN stands for a value that
+    does not exist at this point. ``big``
     is largest_link; the type's own name for its largest link may stand in for it.
     ``envelope`` (not NaN): the largest link's length, from which l1 follows;
     ``speed_limit`` (not NaN): the impact speed from which omega1 > 0 follows; ``window``:
@@ -426,8 +435,9 @@ def _point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sigma_code
             status = S.second_special_position
     if math.isnan(before) and not math.isnan(speed_limit):
         w = nan  # no blow, no speed to derive from its limit
-    return (status, lam0, lam2, lam3, gamma, rk, before, after, ratio, speed, turns_out,
-            mu_min, mu_opp, branch, phi_star, count_out, rk_max, size, l1, w)
+    return LinkagePoint(status, lam0, lam2, lam3, gamma, rk, before, after, ratio, speed,
+                        turns_out, mu_min, mu_opp, branch, phi_star, count_out, rk_max, size,
+                        l1, w)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -444,23 +454,37 @@ def working_transmission_angle(lam0, lam2, lam3, phi_star, window, mu_opposite, 
     return min(mu_edge, mu_opposite)
 
 
-@njit(**KERNEL_OPTIONS)
-def crank_rocker_block(params, geometry_tol, window, out, status):
-    """Evaluate a block of grid points: params (n_params, n), out (n_outputs, n), status (n,)."""
-    for i in range(params.shape[1]):
-        (status[i], out[O.lambda0, i], out[O.lambda2, i], out[O.lambda3, i], out[O.gamma, i],
-         out[O.restitution_kinematic, i], out[O.transfer_before, i], out[O.transfer_after, i],
-         out[O.impact_transfer_ratio, i], out[O.impact_speed, i],
-         out[O.crank_turns_fully, i], out[O.transmission_angle_working, i],
-         out[O.transmission_angle_opposite, i], out[O.assembly_branch, i],
-         out[O.special_crank_angle, i], out[O.special_position_count, i],
-         out[O.restitution_kinematic_max, i], out[O.envelope, i], out[O.crank_length, i],
-         out[O.omega1, i]) = _point(
-            int(params[P.type, i]), params[P.R, i], params[P.largest_link, i],
-            params[P.lambda0, i], params[P.lambda2, i], params[P.lambda3, i],
-            int(params[P.base_root, i]), params[P.crank_length, i], params[P.omega1, i],
-            params[P.sigma, i], geometry_tol, params[P.envelope, i],
-            params[P.impact_speed_limit, i], window)
+@njit(**INNER_OPTIONS)
+def design(i, pr, settings, out, prof):
+    """One grid point (kernels/block.py): its linkage's outputs by name, its status."""
+    lp = linkage_point(
+        int(pr[P.type]), pr[P.R], pr[P.largest_link], pr[P.lambda0], pr[P.lambda2],
+        pr[P.lambda3], int(pr[P.base_root]), pr[P.crank_length], pr[P.omega1], pr[P.sigma],
+        settings.geometry_tol, pr[P.envelope], pr[P.impact_speed_limit],
+        settings.working_window)
+    out[O.lambda0], out[O.lambda2], out[O.lambda3] = lp.lambda0, lp.lambda2, lp.lambda3
+    out[O.gamma], out[O.restitution_kinematic] = lp.gamma, lp.restitution_kinematic
+    out[O.transfer_before], out[O.transfer_after] = lp.transfer_before, lp.transfer_after
+    out[O.impact_transfer_ratio], out[O.impact_speed] = (lp.impact_transfer_ratio,
+                                                         lp.impact_speed)
+    out[O.crank_turns_fully] = lp.crank_turns_fully
+    out[O.transmission_angle_working] = lp.transmission_angle_working
+    out[O.transmission_angle_opposite] = lp.transmission_angle_opposite
+    out[O.assembly_branch] = lp.assembly_branch
+    out[O.special_crank_angle] = lp.special_crank_angle
+    out[O.special_position_count] = lp.special_position_count
+    out[O.restitution_kinematic_max] = lp.restitution_kinematic_max
+    out[O.envelope], out[O.crank_length], out[O.omega1] = (lp.envelope, lp.crank_length,
+                                                         lp.omega1)
+    return lp.status
+
+
+#: the method's options the block reads, by name
+Settings = namedtuple("Settings", ["geometry_tol", "working_window"])
+
+
+#: the block: each design of it by ``design`` (kernels/block.py), cached on disk
+crank_rocker_block = module_level(each_design(design), "crank_rocker_block", globals(), KERNEL_OPTIONS)
 
 
 def run(params, method):
@@ -469,7 +493,10 @@ def run(params, method):
     n = params.shape[1]
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
-    crank_rocker_block(params, method.geometry_tol, method.working_window, out, status)
+    crank_rocker_block(np.ascontiguousarray(params),
+                       Settings(geometry_tol=float(method.geometry_tol),
+                                working_window=float(method.working_window)),
+                       out, status, np.empty((0, n, 0)))
     w = out[O.omega1]
     out[O.blow_energy] = (0.5 * params[P.rocker_inertia] * (out[O.transfer_before] * w) ** 2
                           if "blow_energy" in method.outputs else np.nan)

@@ -55,6 +55,9 @@ class Quantity:
     #: another parameter this one is given instead of (envelope for crank_length): where
     #: this one is given, the other's default is not used (its code is NaN, not recorded)
     replaces: str | None = None
+    #: each value of this categorical quantity runs code of its own (an entry point
+    #: compiled apart): a first run compiles the values on a grid in parallel processes
+    compiles_apart: bool = False
 
     def encode(self, value) -> float:
         """The kernel's code for a value (a word, a number or None for "not given": NaN)."""

@@ -15,11 +15,14 @@ the transport and Coriolis terms a = a_rel + 2 Omega_b k x v_rel + E_b k x r - O
 """
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
-from kernels import KERNEL_OPTIONS
+from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels.block import each_design
+from kernels.cache import module_level
 from kernels.crank_rocker import impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol)
@@ -47,6 +50,17 @@ _ROTATING = {"base_motion": ("rotating",)}
 _HARMONIC = {"base_motion": ("harmonic",)}
 _MOVING = {"base_motion": ("rotating", "harmonic")}
 _WINDOWED = "outside |phi1 - phi1*| < special_window at a special position"
+
+def reaction_profiles(joints) -> tuple:
+    """The profiles of joint reactions, each resolved along and across a link: for each
+    (force, what acts on what, the link), its normal (along) and tangential (across)
+    components, ``F21_n`` and ``F21_t``."""
+    return tuple(Output(f"{force}_{c}", "N", f"{what} {side} the {link} ({force} {part})",
+                        f"{force}^{mark}")
+                 for force, what, link in joints
+                 for c, side, part, mark in (("n", "along", "normal", "n"),
+                                             ("t", "across", "tangential", "τ")))
+
 
 def _rules(given: dict) -> str | None:
     """A harmonic base motion must repeat after a few crank turns: nu = p/q, q <= 12."""
@@ -157,22 +171,10 @@ DECLARATION = Mechanism(
                flags=BRANCH_FLAGS, undetermined="undetermined"),
     ),
     profiles=(
-        Output("F21_n", "N", "crank pin force on the coupler along the coupler "
-               "(F21 normal)", "F21^n"),
-        Output("F21_t", "N", "crank pin force on the coupler across the coupler "
-               "(F21 tangential)", "F21^τ"),
-        Output("F34_n", "N", "base force on the rocker along the rocker (F34 normal)",
-               "F34^n"),
-        Output("F34_t", "N", "base force on the rocker across the rocker (F34 tangential)",
-               "F34^τ"),
-        Output("F32_n", "N", "coupler force on the rocker along the rocker (F32 normal)",
-               "F32^n"),
-        Output("F32_t", "N", "coupler force on the rocker across the rocker "
-               "(F32 tangential)", "F32^τ"),
-        Output("F14_n", "N", "base force on the crank along the crank (F14 normal)",
-               "F14^n"),
-        Output("F14_t", "N", "base force on the crank across the crank (F14 tangential)",
-               "F14^τ"),
+        *reaction_profiles((("F21", "crank pin force on the coupler", "coupler"),
+                            ("F34", "base force on the rocker", "rocker"),
+                            ("F32", "coupler force on the rocker", "rocker"),
+                            ("F14", "base force on the crank", "crank"))),
         Output("balancing_moment", "N m", "balancing moment on the crank (M_b, virtual "
                "work)", "M_b"),
     ),
@@ -226,9 +228,9 @@ def _cross(ax, ay, bx, by):
 
 @njit(**KERNEL_OPTIONS)
 def joint_forces(phi1, pr, sigma, res, snap=0.0):
-    """Joint reactions and balancing moment at crank angle phi1 (see _joint_forces)."""
+    """Joint reactions and balancing moment at crank angle phi1 (see dyad_reactions)."""
     gx, gy, wb, eb = base_state(phi1, pr)
-    return _joint_forces(phi1, pr, sigma, res, snap, gx, gy, wb, eb)
+    return dyad_reactions(phi1, pr, sigma, res, snap, gx, gy, wb, eb)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -269,8 +271,10 @@ def base_turns(pr):
 
 
 @njit(**KERNEL_OPTIONS)
-def _joint_forces(phi1, pr, sigma, res, snap, gx, gy, wb, eb):
-    """Joint reactions and balancing moment at crank angle phi1 (docs/models.md §4.2).
+def dyad_reactions(phi1, pr, sigma, res, snap, gx, gy, wb, eb):
+    """Joint reactions and balancing moment at crank angle phi1 (docs/models.md §4.2): the
+    kinetostatics of the four-bar as its crank and the dyad BCD, solved in closed form (the
+    one dyad solver: the impact machine's dynamic forces use it too).
 
     pr holds one point's parameters (rows P of the declaration); res (length N_RESULT) gets the
     vectors F14, F21, F32, F34 (force on link i by link j, mechanism frame), M_b from virtual
@@ -381,7 +385,7 @@ def _joint_forces(phi1, pr, sigma, res, snap, gx, gy, wb, eb):
 
 
 @njit(**KERNEL_OPTIONS)
-def _peak_quantity(q, res):
+def peak_quantity(q, res):
     """|F_A|, |F_B|, |F_C|, |F_D| or |M_b| (q = PEAK_A ... PEAK_MB) from a solution."""
     if q == PEAK_A:
         return math.sqrt(res[R_F14X] ** 2 + res[R_F14Y] ** 2)
@@ -396,13 +400,13 @@ def _peak_quantity(q, res):
 
 @njit(**KERNEL_OPTIONS)
 def _forces_at(phi, pr, sigma, res, tol, base):
-    """_joint_forces at crank angle phi with the base state ``base`` (gx, gy, Omega_b, E_b)
+    """dyad_reactions at crank angle phi with the base state ``base`` (gx, gy, Omega_b, E_b)
     computed once for the point, or anew at each angle where the base moves (harmonic)."""
     if pr[P.base_motion] == BASE_HARMONIC:
         gx, gy, wb, eb = base_state(phi, pr)
     else:
         gx, gy, wb, eb = base
-    return _joint_forces(phi, pr, sigma, res, tol, gx, gy, wb, eb)
+    return dyad_reactions(phi, pr, sigma, res, tol, gx, gy, wb, eb)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -412,7 +416,7 @@ def _peak_at(phi, data):
     q, pr, sigma, res, tol, base = data
     if not _forces_at(phi, pr, sigma, res, tol, base):
         return math.nan
-    return _peak_quantity(q, res)
+    return peak_quantity(q, res)
 
 
 _golden_peak, _refine_peak = peak_search(_peak_at)
@@ -432,15 +436,13 @@ def cycle_pieces(kind, count, window):
     return np.array([start + window]), np.array([start + 2.0 * math.pi - window])
 
 
-@njit(**KERNEL_OPTIONS)
-def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
-    """One grid point: status, the scalar outputs (out) and the profiles (prof[k, j])."""
-    nan = math.nan
-    for k in range(out.shape[0]):
-        out[k] = nan
-    for k in range(prof.shape[0]):
-        for j in range(prof.shape[1]):
-            prof[k, j] = nan
+@njit(**INNER_OPTIONS)
+def design(i, pr, settings, out, prof):
+    """One grid point (kernels/block.py): status, the scalar outputs (out) and the
+    profiles (prof[k, j])."""
+    tol, window, gl_x, gl_w = (settings.geometry_tol, settings.window, settings.gl_x,
+                               settings.gl_w)
+    n_peak, prof_angles, res = settings.n_peak, settings.angles, settings.res
     l0, l1, l2, l3 = pr[P.l0], pr[P.l1], pr[P.l2], pr[P.l3]
     w1 = pr[P.omega1]
     direction = -1.0 if w1 < 0.0 else 1.0
@@ -504,7 +506,7 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
                 if not _forces_at(xs[j], pr, sigma, res, tol, base):
                     return S.not_assemblable
                 for q in range(N_PEAKS):
-                    values[q, j] = _peak_quantity(q, res)
+                    values[q, j] = peak_quantity(q, res)
             for q in range(N_PEAKS):
                 best[q] = max(best[q], _refine_peak((q, pr, sigma, res, tol, base), xs,
                                                     values[q], PEAK_LOCATION))
@@ -539,23 +541,14 @@ def _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out, prof, res):
     return S.ok
 
 
-@njit(**KERNEL_OPTIONS)
-def linkage_forces_block(params, tol, window, gl_x, gl_w, n_peak, prof_angles, out, status,
-                         prof):
-    pr = np.empty(params.shape[0])
-    res = np.empty(N_RESULT)
-    out_i = np.empty(out.shape[0])
-    prof_i = np.empty((prof.shape[0], prof.shape[2]))
-    for i in range(params.shape[1]):
-        for k in range(params.shape[0]):
-            pr[k] = params[k, i]
-        status[i] = _point(pr, tol, window, gl_x, gl_w, n_peak, prof_angles, out_i, prof_i,
-                           res)
-        for k in range(out.shape[0]):
-            out[k, i] = out_i[k]
-        for k in range(prof.shape[0]):
-            for j in range(prof.shape[2]):
-                prof[k, i, j] = prof_i[k, j]
+#: the method's options the block reads, by name, and its scratch (res: one angle's
+#: result vector, N_RESULT)
+Settings = namedtuple("Settings", ["geometry_tol", "window", "gl_x", "gl_w", "n_peak",
+                                   "angles", "res"])
+
+
+#: the block: each design of it by ``design`` (kernels/block.py), cached on disk
+linkage_forces_block = module_level(each_design(design), "linkage_forces_block", globals(), KERNEL_OPTIONS)
 
 
 def run(params, method):
@@ -566,7 +559,9 @@ def run(params, method):
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
     prof = np.empty((len(F), n, angles.shape[0]))
-    linkage_forces_block(np.ascontiguousarray(params), method.geometry_tol,
-                         method.special_window, gl_x, gl_w, method.peak_samples, angles, out,
-                         status, prof)
+    settings = Settings(geometry_tol=float(method.geometry_tol),
+                        window=float(method.special_window), gl_x=gl_x, gl_w=gl_w,
+                        n_peak=int(method.peak_samples), angles=angles,
+                        res=np.empty(N_RESULT))
+    linkage_forces_block(np.ascontiguousarray(params), settings, out, status, prof)
     return out, status, prof

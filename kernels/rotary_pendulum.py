@@ -80,7 +80,7 @@ DECLARATION = Mechanism(
         Quantity("model", "1", "pendulum model: the paper's equation (paper), the physically "
                  "derived rigid pendulum at constant rotor speed (rigid), a rotor of finite "
                  "inertia with a linear motor law (rotor)", default="paper",
-                 choices=MODELS),
+                 choices=MODELS, compiles_apart=True),
         Quantity("k", "1", "length ratio l1/l2 (k)", "k", default=2.5, **POSITIVE),
         Quantity("xi", "1", "inertia ratio m l2^2/J_c (xi)", "ξ", default=4.0, **POSITIVE),
         Quantity("kappa", "1", "rigid and rotor models: contact radius over the "
@@ -99,7 +99,7 @@ DECLARATION = Mechanism(
                  "(rotor_stop, the paper's), or a blade fixed in the frame hit by the "
                  "striker when it reaches it with |psi| <= tool_window (lab_window)",
                  default="rotor_stop",
-                 choices=TOOLS),
+                 choices=TOOLS, compiles_apart=True),
         Quantity("tool_window", "rad", "lab_window: reach of the blade as the largest |psi| "
                  "at which the striker meets it (the blade's inner edge is at the striker "
                  "radius there)", default=0.2, minimum=0.0, maximum=math.pi / 2,

@@ -15,11 +15,14 @@ Composition: u51 = u31 u53 and u'51 = u'31 u53 + u31^2 u'53.
 """
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
-from kernels import KERNEL_OPTIONS
+from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels.block import each_design
+from kernels.cache import module_level
 from kernels.crank_rocker import branch_values, impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quantity,
                                  geometry_tol)
@@ -226,14 +229,21 @@ def _cycle_peaks(data, n_samples, impacts, peak):
     return peak, peak2
 
 
-@njit(**KERNEL_OPTIONS)
-def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
-           prof_angles, out, prof):
-    nan = math.nan
-    for k in range(out.shape[0]):
-        out[k] = nan
-    for j in range(prof.shape[0]):
-        prof[j] = nan
+@njit(**INNER_OPTIONS)
+def design(i, pr, settings, out, prof):
+    """One grid point (kernels/block.py): its outputs by name, the rocker's angle over the
+    4 pi cycle into prof[ROCKER_ANGLE], its status."""
+    return six_link_point(pr[P.lambda2], pr[P.lambda3], pr[P.mu4], pr[P.mu5], pr[P.beta],
+                          pr[P.delta], pr[P.direction], pr[P.omega1], pr[P.crank_length],
+                          settings.geometry_tol, settings.samples, settings.angles, out,
+                          prof[ROCKER_ANGLE])
+
+
+@njit(**INNER_OPTIONS)
+def six_link_point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
+                   prof_angles, out, prof):
+    """One six-link: its outputs into out (NaN where a value does not exist), the rocker's
+    angle at prof_angles into prof, its status."""
     lam6 = 1.0 - lam2 + lam3
     mu6 = 1.0 - mu4 + mu5
     # docs/models.md §3.1: stage 1 l1 < l3 < l2 with l2 - l3 < l1 (a drag link),
@@ -297,20 +307,12 @@ def _point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
     return S.ok
 
 
-@njit(**KERNEL_OPTIONS)
-def six_link_block(params, tol, n_samples, prof_angles, out, status, prof):
-    out_i = np.empty(out.shape[0])
-    prof_i = np.empty(prof.shape[2])
-    for i in range(params.shape[1]):
-        status[i] = _point(params[P.lambda2, i], params[P.lambda3, i], params[P.mu4, i],
-                           params[P.mu5, i], params[P.beta, i], params[P.delta, i],
-                           params[P.direction, i], params[P.omega1, i],
-                           params[P.crank_length, i], tol, n_samples, prof_angles, out_i,
-                           prof_i)
-        for k in range(out.shape[0]):
-            out[k, i] = out_i[k]
-        for j in range(prof.shape[2]):
-            prof[ROCKER_ANGLE, i, j] = prof_i[j]
+#: the method's options the block reads, by name
+Settings = namedtuple("Settings", ["geometry_tol", "samples", "angles"])
+
+
+#: the block: each design of it by ``design`` (kernels/block.py), cached on disk
+six_link_block = module_level(each_design(design), "six_link_block", globals(), KERNEL_OPTIONS)
 
 
 def run(params, method):
@@ -320,8 +322,9 @@ def run(params, method):
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
     prof = np.empty((len(DECLARATION.profiles), n, angles.shape[0]))
-    six_link_block(np.ascontiguousarray(params), method.geometry_tol, method.samples,
-                   angles, out, status, prof)
+    six_link_block(np.ascontiguousarray(params),
+                   Settings(geometry_tol=float(method.geometry_tol),
+                            samples=int(method.samples), angles=angles), out, status, prof)
     w, j5 = params[P.omega1], params[P.rocker_inertia]
     for energy, transfer in ((O.blow_energy_1, O.transfer_impact_1),
                              (O.blow_energy_2, O.transfer_impact_2)):

@@ -10,7 +10,7 @@ The Python API (the same functions the ``sweep`` command line calls)::
 
 ``Sweep`` (``from_toml``, ``from_dict``), ``run``, ``open_atlas``, ``query``, ``chart``,
 ``profile``, ``boundaries``, ``pareto``, ``with_requirements``, ``info``, ``parameters``,
-``example``, ``examples`` and ``UserError`` are documented in ``sweep.api``. ``import sweep``
+``example``, ``examples``, ``warmup`` and ``UserError`` are documented in ``sweep.api``. ``import sweep``
 is light: each name is imported on first use, and heavy libraries (numba, xarray, dask,
 matplotlib) by the functions that need them.
 
@@ -18,16 +18,18 @@ The import names ``sweep`` and ``kernels`` are generic (PyPI has unrelated packa
 same names); install impact-sweep in its own environment.
 """
 
-__version__ = "0.1.0"
-
-__all__ = ["Sweep", "UserError", "boundaries", "chart", "example", "examples", "info",
-           "open_atlas", "open_boundaries", "parameters", "pareto", "profile", "query",
-           "run", "with_requirements"]
+__all__ = ["Sweep", "UserError", "boundaries", "chart", "decode", "example", "examples",
+           "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
+           "query", "run", "warmup", "with_requirements"]
 
 
 def __getattr__(name: str):
     # PEP 562: the API's names on first use, so that the command line's start-up (and
     # `import sweep`) does not pay for numba and the spec's validation it may not need
+    if name == "__version__":
+        from sweep.metadata import package_version
+
+        return package_version()
     if name in __all__:
         from sweep import api
 

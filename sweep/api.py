@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import contextlib
 import os
-from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping
 
+from sweep import example_specs
 from sweep.errors import UserError
 
 if TYPE_CHECKING:
@@ -32,9 +32,12 @@ if TYPE_CHECKING:
     from sweep.fronts import Front
     from sweep.spec import Sweep
 
-__all__ = ["Sweep", "UserError", "boundaries", "chart", "example", "examples", "info",
-           "open_atlas", "open_boundaries", "parameters", "pareto", "profile", "query",
-           "run", "with_requirements"]
+    #: an atlas: a Dataset of this tool, or the path of one
+    AtlasLike = xarray.Dataset | str | os.PathLike
+
+__all__ = ["Sweep", "UserError", "boundaries", "chart", "decode", "example", "examples",
+           "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
+           "query", "run", "warmup", "with_requirements"]
 
 #: an atlas computed in memory (``run`` without a path) may take at most this much
 IN_MEMORY_LIMIT = 2 * 1024**3  # bytes
@@ -53,33 +56,47 @@ def __getattr__(name: str):
 # ---------------------------------------------------------------- specs
 
 def examples() -> dict[str, str]:
-    """The built-in specs, one per mechanism and capability: {name: title}."""
-    import tomllib
+    """The built-in specs, one per mechanism and capability.
 
-    return {name: tomllib.loads(example_text(name)).get("title", "")
-            for name in sorted(_example_files())}
+    Returns:
+        {name: title} of every built-in spec, sorted by name.
+
+    Example:
+        >>> import sweep
+        >>> "crank_rocker" in sweep.examples()
+        True
+    """
+    return example_specs.titles()
 
 
 def example(name: str) -> Sweep:
-    """A built-in spec by name (``examples()`` lists them), validated."""
+    """A built-in spec by name, validated.
+
+    Parameters:
+        name: a name ``examples()`` lists.
+
+    Returns:
+        The validated ``Sweep``.
+
+    Raises:
+        UserError: ``name`` is not a built-in spec (the message lists them).
+
+    Example:
+        >>> import sweep
+        >>> sweep.example("six_link").mechanism.name
+        'six_link'
+    """
     from sweep import spec
 
-    if name not in _example_files():
+    if name not in example_specs.names():
         raise UserError(f"name: unknown example {name!r}; allowed: "
-                        + ", ".join(sorted(_example_files())))
+                        + ", ".join(example_specs.names()))
     return spec.parse(example_text(name), source=f"example {name}")
 
 
 def example_text(name: str) -> str:
     """The TOML text of a built-in spec."""
-    return resources.files("sweep.example_specs").joinpath(_example_files()[name]).read_text(
-        "utf-8")
-
-
-def _example_files() -> dict[str, str]:
-    return {entry.name[:-len(".toml")]: entry.name
-            for entry in resources.files("sweep.example_specs").iterdir()
-            if entry.name.endswith(".toml")}
+    return example_specs.text(name)
 
 
 def as_sweep(spec: Sweep | Mapping | str | os.PathLike) -> Sweep:
@@ -109,9 +126,34 @@ def run(spec: Sweep | Mapping | str | os.PathLike, path: str | os.PathLike | Non
     kept beside the target, the atlas is written atomically and opened: an interrupted run
     continues with ``resume=True``; an existing file is overwritten only with ``force``;
     a spec's ``[chart]`` is drawn beside it (``ATLAS.png``, and its refined boundaries in
-    ``ATLAS.bounds.nc`` where it asks for them). ``chunk``, ``workers`` and ``scheduler``
-    (a dask.distributed address) override the spec's ``[run]`` settings. The values do not
-    depend on any of them.
+    ``ATLAS.bounds.nc`` where it asks for them). The values do not depend on ``chunk``,
+    ``workers`` or ``scheduler``.
+
+    Parameters:
+        spec: a ``Sweep``, a spec document as a dict (grid axes as lists, tuples, ranges or
+            numpy arrays), or the path of a TOML file.
+        path: where to write the atlas (``.nc``); ``None`` keeps it in memory.
+        force: overwrite an existing atlas at ``path`` (never one of the run's inputs).
+        resume: continue an interrupted run on ``path``.
+        chunk: points per block (overrides the spec's ``[run] chunk``).
+        workers: threads (default: every core).
+        scheduler: the address of a dask.distributed scheduler to run on.
+        progress: show a progress bar on standard error.
+
+    Returns:
+        The atlas, an ``xarray.Dataset``: every output with its units and long_name, a
+        ``status`` flag per design, and the spec, method and provenance in its attributes.
+
+    Raises:
+        UserError: bad input (a spec, an argument), before any compute and before anything
+            is written; a run that cannot fit the disk or the memory.
+
+    Example:
+        >>> import sweep
+        >>> atlas = sweep.run({"mechanism": "crank_rocker",
+        ...                    "grid": {"R": [0.2, 0.3], "largest_link": (2.0, 3.0)}})
+        >>> dict(atlas.sizes)
+        {'R': 2, 'largest_link': 2}
     """
     sweep = as_sweep(spec)
     if path is None:
@@ -126,7 +168,7 @@ def run(spec: Sweep | Mapping | str | os.PathLike, path: str | os.PathLike | Non
             raise UserError(f"path: the atlas would take {need / 1024**3:.1f} GiB in memory; "
                             "give a path to write it to a file")
         return runner.run_in_memory(sweep, progress=progress)
-    written = write(sweep, Path(path), force=force, resume=resume, chunk=chunk,
+    written = write(sweep, path_argument(path, "path"), force=force, resume=resume, chunk=chunk,
                     workers=workers, scheduler=scheduler, progress=progress)
     return open_atlas(written["atlas"])
 
@@ -138,19 +180,19 @@ def write(sweep: Sweep, target: Path, *, force: bool = False, resume: bool = Fal
     ``sweep run`` does). Returns where each file went and how many blocks were reused."""
     from sweep import resources, runner, store
 
-    store.check_target(target, force or resume)
-    if sweep.designs is not None and target.resolve() == Path(sweep.designs.record["atlas"]):
-        raise UserError("output: would overwrite the atlas this sweep's designs come from "
-                        "(grid.from); write to another file")
+    inputs = [sweep.designs.record["atlas"]] if sweep.designs is not None else []
+    store.check_target(target, force or resume, inputs=inputs)
     if resume and target.exists():
         raise UserError(f"resume: {target} is already complete")
     chart_path = target.with_suffix(".png") if sweep.chart else None
     if chart_path is not None:
-        store.check_target(chart_path, force, suffix=".png")
+        store.check_target(chart_path, force, suffix=".png", inputs=inputs)
     bounds_path = (bounds_target(target) if sweep.chart and sweep.chart.boundaries
                    else None)
     if bounds_path is not None:
-        store.check_target(bounds_path, force)
+        store.check_target(bounds_path, force, inputs=inputs)
+    runner.check_run(sweep.with_run(chunk=chunk, workers=workers, scheduler=scheduler),
+                     target)  # disk and memory before the lock: a full disk takes no lock
     with resources.target_lock(target):
         done = runner.run_sweep(sweep, target, chunk=chunk, workers=workers,
                                 scheduler=scheduler, progress=progress, resume=resume,
@@ -171,6 +213,34 @@ def write(sweep: Sweep, target: Path, *, force: bool = False, resume: bool = Fal
     return result
 
 
+def warmup(mechanisms: list[str] | str | None = None, *, workers: int | None = None,
+           progress: bool = False) -> dict[str, float]:
+    """Compile ahead what the first sweeps of these mechanisms need.
+
+    Each built-in example of them and, for the rotary pendulum, each system under the
+    default method, compiled in parallel processes into the compile cache every later run
+    loads (once per installation).
+
+    Parameters:
+        mechanisms: a name or a list of names (default: every mechanism).
+        workers: processes compiling at once (default: the cores).
+        progress: show a progress bar.
+
+    Returns:
+        The CPU seconds of each compile job, by name.
+
+    Raises:
+        UserError: an unknown mechanism, or ``workers`` not a whole number >= 1.
+    """
+    from sweep.warmup import warm_up_mechanisms
+
+    if isinstance(mechanisms, str):
+        mechanisms = [mechanisms]
+    if workers is not None and (not isinstance(workers, int) or workers < 1):
+        raise UserError(f"workers: a whole number of processes, at least 1, not {workers!r}")
+    return warm_up_mechanisms(mechanisms, workers, progress)
+
+
 def bounds_target(atlas: Path) -> Path:
     """Where the boundaries of an atlas go by default: ATLAS.bounds.nc beside it."""
     return atlas.with_name(atlas.stem + ".bounds.nc")
@@ -178,10 +248,18 @@ def bounds_target(atlas: Path) -> Path:
 
 # ---------------------------------------------------------------- reading atlases
 
+def path_argument(value, name: str) -> Path:
+    """A path argument of the API as a Path, or a UserError naming the argument."""
+    if isinstance(value, (str, os.PathLike)):
+        return Path(value)
+    raise UserError(f"{name}: the path of a file (a str or os.PathLike), not "
+                    f"{type(value).__name__}")
+
+
 def _open_netcdf(path, what: str):
     import xarray as xr
 
-    p = Path(path)
+    p = path_argument(path, what)
     if not p.is_file():
         raise UserError(f"{what}: no such file: {p}")
     try:
@@ -197,7 +275,18 @@ def is_boundaries(ds) -> bool:
 
 
 def open_atlas(path: str | os.PathLike) -> xarray.Dataset:
-    """An atlas file, opened lazily with xarray (close it, or use it in a ``with``)."""
+    """An atlas file, opened lazily with xarray.
+
+    Parameters:
+        path: the atlas (a ``.nc`` written by ``run`` or ``sweep run``).
+
+    Returns:
+        The atlas as an ``xarray.Dataset``; close it, or use it in a ``with``.
+
+    Raises:
+        UserError: no such file, not a netCDF file, not an atlas of this tool (a
+            boundaries file is named as one), or ``path`` is not a path.
+    """
     ds = _open_netcdf(path, "atlas")
     if is_boundaries(ds):
         ds.close()
@@ -246,7 +335,17 @@ def reading(ds):
 
 
 def open_boundaries(path: str | os.PathLike) -> xarray.Dataset:
-    """A boundaries file written by ``boundaries`` (``sweep boundaries``)."""
+    """A boundaries file written by ``boundaries`` (``sweep boundaries``).
+
+    Parameters:
+        path: the file (``ATLAS.bounds.nc``).
+
+    Returns:
+        The crossings as an ``xarray.Dataset``.
+
+    Raises:
+        UserError: no such file, or not a file ``boundaries`` wrote.
+    """
     ds = _open_netcdf(path, "boundaries")
     if not is_boundaries(ds):
         ds.close()
@@ -268,10 +367,73 @@ def _atlas(atlas) -> xarray.Dataset:
                     f"{type(atlas).__name__}")
 
 
-def with_requirements(atlas, require):
-    """The atlas with the requirements ``require`` (limits as text, "impact_speed <= 10")
-    evaluated into its ``requirements`` flag and ``requirement_margin``; unchanged for
-    none."""
+def decode(atlas: AtlasLike) -> xarray.Dataset:
+    """The atlas with every flag variable as its meanings, for plain xarray.
+
+    A flag variable (``status``, ``regime``, ``requirements``, ...) holds small integer
+    codes with CF ``flag_values`` and ``flag_meanings``; here it holds the meanings as
+    text, so that xarray compares them by name. The flag attributes stay, for reference.
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+
+    Returns:
+        A copy of the atlas with its flags as text.
+
+    Raises:
+        UserError: ``atlas`` is not an atlas of this tool.
+
+    Example:
+        >>> import sweep
+        >>> atlas = sweep.run({"mechanism": "crank_rocker",
+        ...                    "grid": {"R": [0.2], "largest_link": [1.5, 3.0]}})
+        >>> sweep.decode(atlas).status.values.ravel().tolist()
+        ['second_special_position', 'ok']
+        >>> int((sweep.decode(atlas).status == "ok").sum())
+        1
+    """
+    import numpy as np
+
+    from sweep.selection import flag_names
+
+    ds = _atlas(atlas).copy()
+    for name, var in list(ds.variables.items()):
+        if "flag_meanings" not in var.attrs:
+            continue
+        meaning = flag_names(var)
+        codes = np.unique(var.values)
+        words = np.array([meaning.get(int(code), "") for code in codes])
+        ds[name] = var.copy(data=words[np.searchsorted(codes, var.values)])
+    return ds
+
+
+def with_requirements(atlas: AtlasLike,
+                      require: list[str] | str | None) -> xarray.Dataset:
+    """The atlas with requirements evaluated into its ``requirements`` flag.
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        require: limits as text (``"impact_speed <= 10"``, ``"transmission_angle_working
+            >= 40deg"``), one or a list; replacing the atlas's own. None or empty: the
+            atlas unchanged.
+
+    Returns:
+        The atlas with the flag ``requirements`` (``met``, ``no_value``, or the limit
+        failed by the most) and ``requirement_margin`` (the smallest relative slack). A
+        design that fails a limit is named by it even where another limit's output has no
+        value there: a failure takes precedence over ``no_value``.
+
+    Raises:
+        UserError: a limit that is not ``NAME OP NUMBER`` on a numeric output.
+
+    Example:
+        >>> import sweep
+        >>> atlas = sweep.run({"mechanism": "crank_rocker",
+        ...                    "grid": {"R": [0.2, 0.3], "largest_link": [3.0]}})
+        >>> flagged = sweep.with_requirements(atlas, "impact_speed <= 1")
+        >>> sweep.decode(flagged).requirements.values.ravel().tolist()
+        ['above_impact_speed', 'above_impact_speed']
+    """
     from sweep import requirements
 
     if not require:
@@ -285,23 +447,43 @@ def with_requirements(atlas, require):
     return requirements.with_requirements(atlas, limits)
 
 
-def query(atlas, where: str | None = None, *, sort: str | None = None,
+def query(atlas: AtlasLike, where: str | None = None, *, sort: str | None = None,
           descending: bool = False, limit: int | None = None,
-          columns: list[str] | None = None, at: Mapping[str, Any] | None = None,
-          require: list[str] | None = None, rank_all: bool = False) -> pandas.DataFrame:
-    """The designs of an atlas that satisfy ``where``, as a pandas DataFrame: one row per
-    grid point, its axes first, flags as their meanings (``status == "ok"``).
+          columns: list[str] | str | None = None, at: Mapping[str, Any] | None = None,
+          require: list[str] | str | None = None,
+          rank_all: bool = False) -> pandas.DataFrame:
+    """The designs of an atlas that satisfy a condition, as a table.
 
-    ``where`` is a condition in the safe query language (names of variables and axes,
-    numbers, quoted strings, arithmetic, comparisons, and/or/not, abs sqrt log log10 exp
-    isnan isfinite degrees radians). ``sort`` orders by a variable (NaN last), largest
-    first with ``descending``. ``columns`` picks variables (default: every variable with
-    one value per grid point); a profile is shown at the angle ``at`` gives, e.g.
-    ``{"crank_angle": "90deg"}`` (or a number in the axis's units). ``limit``: at most
-    that many rows; ``frame.attrs["matched"]`` says how many matched in all. ``require``:
-    limits ("impact_speed <= 10") evaluated into the ``requirements`` flag (replacing the
-    atlas's own); a design that fails the requirements is never ranked above one that meets
-    them, unless ``rank_all``.
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        where: a condition in the safe query language: names of variables and axes,
+            numbers, quoted strings, arithmetic, comparisons, and/or/not, abs sqrt log
+            log10 exp isnan isfinite degrees radians; flags compare by meaning
+            (``status == "ok"``).
+        sort: a variable to order by (NaN last).
+        descending: largest first.
+        limit: at most this many rows (``frame.attrs["matched"]`` says how many matched).
+        columns: the variables to show, a list or a string of names separated by commas
+            (default: every variable with one value per grid point).
+        at: profiles at this value of their axis, e.g. ``{"crank_angle": "90deg"}``.
+        require: limits evaluated into the ``requirements`` flag (``with_requirements``).
+        rank_all: rank designs that fail a requirement among those that meet them.
+
+    Returns:
+        A ``pandas.DataFrame``, one row per grid point, its axes first, flags as their
+        meanings.
+
+    Raises:
+        UserError: a condition, name or argument that is not allowed (one line naming it).
+
+    Example:
+        >>> import sweep
+        >>> atlas = sweep.run({"mechanism": "crank_rocker",
+        ...                    "grid": {"R": [0.2, 0.3], "largest_link": [3.0]}})
+        >>> frame = sweep.query(atlas, 'status == "ok"', sort="impact_speed",
+        ...                     descending=True, columns="impact_speed")
+        >>> list(frame.columns), len(frame)
+        (['R', 'largest_link', 'impact_speed'], 2)
     """
     from sweep.selection import at_values, parse, select
 
@@ -310,6 +492,8 @@ def query(atlas, where: str | None = None, *, sort: str | None = None,
     if limit is not None and (isinstance(limit, bool) or not isinstance(limit, int)
                               or limit < 1):
         raise UserError(f"limit: a whole number >= 1, not {limit!r}")
+    if isinstance(columns, str):
+        columns = [c.strip() for c in columns.split(",") if c.strip()]
     ds = _atlas(atlas)
     with reading(ds):
         ds = with_requirements(ds, require)
@@ -317,31 +501,47 @@ def query(atlas, where: str | None = None, *, sort: str | None = None,
                       descending=descending, at=at_values(at), rank_all=rank_all)
 
 
-def chart(atlas, x: str, y: str, color: str, *, path: str | os.PathLike | None = None,
+def chart(atlas: AtlasLike, x: str, y: str, color: str, *, path: str | os.PathLike | None = None,
           at: Mapping[str, Any] | None = None, degrees: bool = True,
           all_status: bool = False, boundaries: Any = None,
           overlay: str | None = None, force: bool = False,
           require: list[str] | None = None) -> Figure:
-    """A design chart of ``color`` over ``x`` and ``y`` as a matplotlib Figure (saved as a
-    PNG too where ``path`` is given).
+    """A design chart of one variable over two grid axes.
 
     A numeric output is a colour map with contour lines; a flag (``regime``, ``status``)
     or a count that takes few values, categories named in the legend. Cells without a
-    design value are drawn in greys named by their status (``all_status``: colour them
-    too). One panel per value of a third grid axis; ``at`` takes other axes at one value
-    ({axis: number or "60deg"}). Angles are drawn in degrees unless ``degrees=False``.
-    ``require``: limits evaluated into the ``requirements`` flag, e.g. to colour by it.
-    ``boundaries``: the refined crossings (a Dataset or the path ``boundaries`` wrote),
-    drawn as lines; ``overlay``: a numeric output drawn as labelled contour lines on top.
-    An existing PNG is overwritten only with ``force``.
+    design value are drawn in greys named by their status. One panel per value of a third
+    grid axis. Angles are drawn in degrees unless ``degrees=False``.
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        x: the grid axis across the chart.
+        y: the grid axis up the chart.
+        color: the variable drawn in colour.
+        path: a PNG to save the chart to (an existing one only with ``force``).
+        at: other grid axes taken at one value, {axis: number or "60deg"}.
+        degrees: angles in degrees.
+        all_status: colour the cells of every status, not only the usable ones.
+        boundaries: refined crossings (a Dataset or the path ``boundaries`` wrote), drawn
+            as lines.
+        overlay: a numeric output drawn as labelled contour lines on top.
+        force: overwrite an existing PNG (never the atlas itself).
+        require: limits evaluated into the ``requirements`` flag, e.g. to colour by it.
+
+    Returns:
+        The ``matplotlib.figure.Figure``.
+
+    Raises:
+        UserError: a variable or axis the atlas does not have, or a path that cannot be
+            written.
     """
     from sweep.charts import design_figure
     from sweep.selection import at_values
 
-    out = _png(path, force)
+    ds = _atlas(atlas)
+    out = _png(path, force, ds, boundaries)
     if isinstance(boundaries, (str, os.PathLike)):
         boundaries = open_boundaries(boundaries)
-    ds = _atlas(atlas)
     with reading(ds):
         ds = with_requirements(ds, require)
         fig = design_figure(ds, x, y, color, ok_only=not all_status, degrees=degrees,
@@ -351,22 +551,35 @@ def chart(atlas, x: str, y: str, color: str, *, path: str | os.PathLike | None =
     return fig
 
 
-def profile(atlas, variables: list[str] | str, where: str | None = None, *,
+def profile(atlas: AtlasLike, variables: list[str] | str, where: str | None = None, *,
             path: str | os.PathLike | None = None, degrees: bool = True,
             force: bool = False) -> Figure:
-    """Profiles (values over the crank angle, e.g. joint reactions) at the first grid
-    point matching ``where``, as a matplotlib Figure: one panel per unit (saved as a PNG
-    too where ``path`` is given; an existing one is overwritten only with ``force``).
-    ``fig.grid_point`` says which grid point it shows."""
+    """Profiles (values over the crank angle, e.g. joint reactions) at one grid point.
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        variables: profile variables, a list or names separated by commas.
+        where: a condition picking the grid point (the first that matches).
+        path: a PNG to save the figure to (an existing one only with ``force``).
+        degrees: angles in degrees.
+        force: overwrite an existing PNG.
+
+    Returns:
+        The ``matplotlib.figure.Figure``, one panel per unit; ``fig.grid_point`` says which
+        grid point it shows.
+
+    Raises:
+        UserError: a variable that is not a profile, or no grid point matches ``where``.
+    """
     from sweep.charts import profile_figure
     from sweep.selection import parse
 
-    out = _png(path, force)
+    ds = _atlas(atlas)
+    out = _png(path, force, ds)
     if where is not None:
         parse(where)
     names = [v.strip() for v in variables.split(",")] if isinstance(variables, str) \
         else list(variables)
-    ds = _atlas(atlas)
     with reading(ds):
         fig, fig.grid_point = profile_figure(ds, [n for n in names if n], where, degrees)
     if out is not None:
@@ -374,15 +587,29 @@ def profile(atlas, variables: list[str] | str, where: str | None = None, *,
     return fig
 
 
-def _png(path, force: bool) -> Path | None:
-    """Where a figure goes, checked before anything is drawn (store.check_target)."""
+def _png(path, force: bool, *inputs, name: str = "path") -> Path | None:
+    """Where a figure goes, checked before anything is drawn (store.check_target); the
+    command's ``inputs`` (atlases, their files) are never written over."""
     from sweep.store import check_target
 
     if path is None:
         return None
-    out = Path(path)
-    check_target(out, force, suffix=".png")
+    out = path_argument(path, name)
+    check_target(out, force, suffix=".png", inputs=input_files(*inputs))
     return out
+
+
+def input_files(*inputs) -> list[str]:
+    """The files a command reads: paths as given, and the files Datasets were opened from."""
+    files = []
+    for item in inputs:
+        if isinstance(item, (str, os.PathLike)):
+            files.append(str(item))
+        elif item is not None and hasattr(item, "encoding"):
+            source = item.encoding.get("source")
+            if source:
+                files.append(source)
+    return files
 
 
 def save_figure(fig, out: Path) -> None:
@@ -393,35 +620,61 @@ def save_figure(fig, out: Path) -> None:
         fig.savefig(tmp, dpi=110, format="png")
 
 
-def boundaries(atlas, var: str = "status", tol: float = 1e-8, *,
+def boundaries(atlas: AtlasLike, var: str = "status", tol: float = 1e-8, *,
                path: str | os.PathLike | None = None, force: bool = False,
                resume: bool = False, workers: int | None = None, chunk: int | None = None,
                progress: bool = False) -> xarray.Dataset:
-    """Every boundary of a flag variable of an atlas (where ``status`` or ``regime``
-    changes between neighbouring grid points), bisected on its grid edge through the same
-    kernels to ``tol × max(1, |x|)`` in the axis's units: one row per crossing, with the
-    meanings on each side and what explains it. Written atomically to ``path`` (a ``.nc``
-    file) where given; an interrupted refinement continues with ``resume=True``."""
+    """Every boundary of a flag variable of an atlas, refined.
+
+    Where ``var`` (``status``, ``regime``, ``requirements``) changes between neighbouring
+    grid points, the crossing is bisected on its grid edge through the same kernels to
+    ``tol × max(1, |x|)`` in the axis's units.
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        var: the flag variable.
+        tol: the tolerance of each crossing, relative to max(1, |x|).
+        path: a ``.nc`` to write the crossings to (atomically); never the atlas itself.
+        force: overwrite an existing file at ``path``.
+        resume: continue an interrupted refinement on ``path``.
+        workers: threads (default: every core).
+        chunk: crossings per task.
+        progress: show a progress bar.
+
+    Returns:
+        An ``xarray.Dataset``, one row per crossing: its place, the meanings on each side
+        and what explains it.
+
+    Raises:
+        UserError: ``var`` is not a flag of the atlas, or ``path`` cannot be written.
+    """
     from sweep.refinement import refine
 
     ds = _atlas(atlas)
-    target = None if path is None else Path(path)
+    target = None if path is None else path_argument(path, "path")
     if target is not None:
         from sweep.store import check_target
 
-        source = ds.encoding.get("source")
-        if source and target.name and target.resolve() == Path(source).resolve():
-            raise UserError("output: would overwrite the atlas itself")
-        check_target(target, force or resume)
+        check_target(target, force or resume, inputs=input_files(atlas, ds))
     with reading(ds):
         return refine(ds, var, tol, target=target, workers=workers, chunk=chunk,
                       resume=resume, force=force, progress=progress)
 
 
-def info(atlas, require: list[str] | None = None) -> str:
-    """What an atlas's designs were computed with, in words and units; the range of every
-    output; status counts (and with ``require``, how many designs meet those limits);
-    provenance. A boundaries file: its crossings by sides."""
+def info(atlas: AtlasLike, require: list[str] | None = None) -> str:
+    """What an atlas holds and how it was made, in words and units.
+
+    Parameters:
+        atlas: an atlas or a boundaries file (a Dataset, or the path of one).
+        require: limits to count the designs that meet (``with_requirements``).
+
+    Returns:
+        The text: grid, fixed parameters and method; the range of every output; status
+        counts; provenance. For a boundaries file, its crossings by sides.
+
+    Raises:
+        UserError: not an atlas or boundaries file of this tool.
+    """
     from sweep import registry
     from sweep.describe import atlas_text, boundaries_text
 
@@ -440,22 +693,50 @@ def info(atlas, require: list[str] | None = None) -> str:
                           else "(in memory)", mech)
 
 
-def pareto(atlas, maximize: list[str] | str = (), minimize: list[str] | str = (), *,
+def pareto(atlas: AtlasLike, maximize: list[str] | str = (), minimize: list[str] | str = (), *,
            where: str | None = None, require: list[str] | None = None, pick: str = "knee",
            weights: list[float] | None = None, path: str | os.PathLike | None = None,
            chart: str | os.PathLike | None = None, degrees: bool = True,
-           force: bool = False) -> Front:
-    """The Pareto front of an atlas's feasible designs (status ok, requirements met,
-    ``where``) in the objectives ``maximize`` and ``minimize`` (output names), and the one
-    design the rule ``pick`` names: ``knee`` (nearest the ideal point, each objective
-    scaled over the front), ``lexicographic`` (the objectives in the order given, maxima
-    first) or ``weighted`` (``weights``, one per objective, on the scaled objectives).
+           force: bool = False, tie_tol: float = 1e-9) -> Front:
+    """The Pareto front of an atlas's feasible designs, and the one a rule picks.
 
-    Returns a ``Front``: ``front.designs`` (an xarray Dataset over ``design``, every
-    variable with its attributes, ``picked`` marking the pick), ``front.picked_design``.
-    ``path``: the selection written as netCDF (a ``.nc``; a chained sweep's source);
-    ``chart``: the front over the feasible cloud as a PNG. ``require`` adds limits as in
-    ``query``. Existing files are overwritten only with ``force``.
+    A design is a candidate when its status is ``ok``, it meets the requirements and
+    ``where``, and it has a value of every objective; the front is the candidates no other
+    dominates. Pick rules: ``knee`` (nearest the ideal point, each objective scaled over
+    the front), ``lexicographic`` (the objectives in the order given, maxima first) or
+    ``weighted`` (``weights``, one per objective, on the scaled objectives).
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        maximize: outputs to maximise (a name or a list).
+        minimize: outputs to minimise (a name or a list).
+        where: a condition the candidates must meet.
+        require: limits replacing the atlas's own (``with_requirements``).
+        pick: the rule that picks one design.
+        weights: with ``pick="weighted"``, one weight per objective.
+        path: a ``.nc`` to write the front to (a chained sweep's source).
+        chart: a PNG of the front over the feasible designs.
+        degrees: angles in degrees on the chart.
+        force: overwrite existing files (never the atlas itself).
+        tie_tol: objective values that agree to this relative tolerance are ties.
+
+    Returns:
+        A ``Front``: ``front.designs`` (an xarray Dataset over ``design``, ``picked``
+        marking the pick) and ``front.picked_design``.
+
+    Raises:
+        UserError: no objective, an objective the atlas does not have, no feasible design,
+            or a file that cannot be written.
+
+    Example:
+        >>> import sweep
+        >>> atlas = sweep.run({"mechanism": "crank_rocker",
+        ...                    "grid": {"R": [0.1, 0.2, 0.3], "largest_link": [2.0, 3.0]},
+        ...                    "fixed": {"rocker_inertia": 0.05},
+        ...                    "outputs": ["impact_speed", "blow_energy", "envelope"]})
+        >>> front = sweep.pareto(atlas, maximize="blow_energy", minimize="envelope")
+        >>> int(front.designs.sizes["design"]) >= 1
+        True
     """
     from sweep import fronts
     from sweep.selection import parse
@@ -463,16 +744,16 @@ def pareto(atlas, maximize: list[str] | str = (), minimize: list[str] | str = ()
 
     if where is not None:
         parse(where)
-    target = None if path is None else Path(path)
-    if target is not None:
-        check_target(target, force)
-    picture = _png(chart, force)
     ds = _atlas(atlas)
+    target = None if path is None else path_argument(path, "path")
+    if target is not None:
+        check_target(target, force, inputs=input_files(atlas, ds))
+    picture = _png(chart, force, atlas, ds, name="chart")
     source = ds.encoding.get("source", "")
     with reading(ds):
         ds = with_requirements(ds, require)
         result = fronts.front(ds, maximize, minimize, where=where, pick=pick,
-                              weights=weights, source=str(source))
+                              weights=weights, source=str(source), tie_tol=tie_tol)
         result.designs.load()
         fig = None if picture is None else fronts.figure(ds, result, where, degrees)
     if target is not None:
@@ -495,8 +776,17 @@ def write_selection(ds: xarray.Dataset, target: Path) -> None:
 
 
 def parameters(mechanism: str | None = None) -> str:
-    """The mechanisms, or one mechanism's parameters, method keys, outputs and statuses,
-    with units, defaults and allowed values."""
+    """The mechanisms, or one mechanism's parameters, method keys, outputs and statuses.
+
+    Parameters:
+        mechanism: a mechanism's name; ``None`` lists the mechanisms.
+
+    Returns:
+        The text ``sweep parameters`` prints: units, defaults and allowed values.
+
+    Raises:
+        UserError: an unknown mechanism (the message lists them).
+    """
     from sweep import registry
 
     if mechanism is None:

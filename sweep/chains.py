@@ -74,6 +74,7 @@ class Designs:
     coordinates: dict  # name -> (values per design, attrs)
     record: dict  # the recorded spec's from-table (atlas, where, map, designs, sha256)
     provenance: dict = field(default_factory=dict)  # the source's title, spec, code version
+    notes: tuple = ()  # what the target takes that the source does not give, one line each
 
     @property
     def count(self) -> int:

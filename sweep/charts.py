@@ -567,14 +567,14 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
     from matplotlib.figure import Figure
 
     if not names:
-        raise UserError("vars: give at least one profile variable")
+        raise UserError("variables: give at least one profile variable")
     grid_dims = list(ds["status"].dims)
     for name in names:
         if name not in ds.data_vars:
-            raise UserError(f"vars: unknown variable {name!r}")
+            raise UserError(f"variables: unknown variable {name!r}")
         extra = [d for d in ds[name].dims if d not in grid_dims]
         if len(extra) != 1:
-            raise UserError(f"vars: {name} is not a profile (it has no extra dimension)")
+            raise UserError(f"variables: {name} is not a profile (it has no extra dimension)")
     pdim = [d for d in ds[names[0]].dims if d not in grid_dims][0]
     mask = evaluate(ds, where).values if where else np.ones(ds["status"].shape, bool)
     hits = np.argwhere(mask)

@@ -13,7 +13,7 @@ from pathlib import Path
 import click
 
 from sweep import api
-from sweep.errors import UserError
+from sweep.errors import UserError, for_command_line
 
 DEFAULT_EXAMPLE = "crank_rocker"
 EXIT_CODES = ("Exit status: 0 success; 2 bad input (one line naming the field, before any "
@@ -72,9 +72,12 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
     The atlas is written atomically; every finished block is kept beside it until then, so
     an interrupted run continues with --resume. A spec's [chart] is drawn beside the atlas
     (ATLAS.png)."""
-    from sweep.metadata import file_status_counts
+    from sweep.metadata import file_status_counts, status_summary
 
     sweep_spec = _spec(spec_file)
+    if not quiet:
+        for note in sweep_spec.notes:
+            click.echo(f"sweep: note: {note}", err=True)
     default = f"{DEFAULT_EXAMPLE}_atlas.nc" if spec_file is None else \
         Path(spec_file).with_suffix(".nc").name
     target = Path(output if output is not None else default)
@@ -84,7 +87,7 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
     elapsed = time.perf_counter() - started
     if quiet:
         return
-    counts = file_status_counts(target)
+    counts, usable = file_status_counts(target)
     click.echo(f"atlas: {target.resolve()}")
     if done["boundaries"] is not None:
         click.echo(f"boundaries: {done['boundaries'].resolve()} ({done['crossings']:,} "
@@ -93,8 +96,8 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
         click.echo(f"chart: {done['chart'].resolve()}")
     if done["reused"]:
         click.echo(f"resumed: {done['reused']} of {done['blocks']} blocks were already done")
-    click.echo(f"{sweep_spec.size} points in {elapsed:.2f} s; status: "
-               + ", ".join(f"{k} {v}" for k, v in counts.items() if v))
+    click.echo(f"{sweep_spec.size:,} points in {elapsed:.2f} s; "
+               + status_summary(counts, usable))
 
 
 @cli.command(short_help="Refine the boundaries of a flag (status, regime) to a tolerance.",
@@ -306,11 +309,14 @@ def _rows_text(frame, units: list[str], fmt: str) -> str:
                    "chained sweep's source")
 @click.option("--chart", "chart_path", type=click.Path(dir_okay=False), default=None,
               metavar="PNG", help="draw the front over the feasible designs")
+@click.option("--tie-tol", type=click.FloatRange(0.0, 1e-2, max_open=True), default=1e-9,
+              show_default=True,
+              help="objective values that agree to this relative tolerance are ties")
 @click.option("--degrees", is_flag=True, help="print angles in degrees")
 @click.option("--format", "fmt", type=click.Choice(["table", "csv", "json"]), default="table")
 @click.option("--force", is_flag=True, help="overwrite existing output files")
 def pareto(atlas_file, maximize, minimize, where, require, pick, weights, output, chart_path,
-           degrees, fmt, force):
+           tie_tol, degrees, fmt, force):
     """The non-dominated feasible designs (status ok, requirements met, --where) of any
     number of objectives, and the design a rule picks, printed with all its outputs."""
     import json
@@ -322,7 +328,8 @@ def pareto(atlas_file, maximize, minimize, where, require, pick, weights, output
         result = api.pareto(ds, list(maximize), list(minimize), where=where,
                             require=list(require), pick=pick,
                             weights=None if weights is None else weights.split(","),
-                            path=output, chart=chart_path, degrees=True, force=force)
+                            path=output, chart=chart_path, degrees=True, force=force,
+                            tie_tol=tie_tol)
     designs = result.designs
     dims = ["design"]
     columns = [c for c in designs.coords if designs[c].dims == ("design",)] + \
@@ -424,6 +431,27 @@ def profile(atlas_file, names, where, output, radians, force):
     click.echo(f"profile at {fig.grid_point}: {Path(output).resolve()}")
 
 
+@cli.command(short_help="Compile the kernels ahead, once per installation.",
+             epilog=_epilog("sweep warmup                     # every mechanism",
+                            "sweep warmup rotary_pendulum impact_machine"))
+@click.argument("mechanisms", nargs=-1, metavar="[MECHANISM ...]")
+@click.option("--workers", type=click.IntRange(1, 1024),
+              help="processes compiling at once (default: all cores)")
+@click.option("-q", "--quiet", is_flag=True, help="no progress bar or summary")
+def warmup(mechanisms, workers, quiet):
+    """Compile what the first sweeps of these mechanisms need (default: all): each
+    built-in example and each pendulum system under the default method, in parallel
+    processes, into the compile cache every later run loads. A first run then starts in
+    seconds instead of compiling for up to a minute."""
+    from kernels.cache import cache_dir
+
+    started = time.perf_counter()
+    times = api.warmup(list(mechanisms) or None, workers=workers, progress=not quiet)
+    if not quiet:
+        click.echo(f"{len(times)} compile jobs in {time.perf_counter() - started:.0f} s "
+                   f"({sum(times.values()):.0f} CPU s); cache: {cache_dir()}")
+
+
 def debugging() -> bool:
     """SWEEP_DEBUG=1 (or true, yes, on) shows a failure's traceback; 0 or empty does not."""
     return os.environ.get("SWEEP_DEBUG", "").strip().lower() in ("1", "true", "yes", "on")
@@ -432,10 +460,15 @@ def debugging() -> bool:
 def main(argv: list[str] | None = None) -> None:
     from sweep.resources import RunFailed, RunInterrupted
 
+    args = sys.argv[1:] if argv is None else list(argv)
+    if not args:  # `sweep` alone: its usage and commands, as --help prints them
+        with click.Context(cli, info_name="sweep", **cli.context_settings) as ctx:
+            click.echo(cli.get_help(ctx))
+        sys.exit(0)
     try:
         cli.main(args=argv, prog_name="sweep", standalone_mode=False)
     except UserError as err:
-        click.echo(f"sweep: error: {err}", err=True)
+        click.echo(f"sweep: error: {for_command_line(str(err))}", err=True)
         sys.exit(2)
     except click.exceptions.Exit as err:
         sys.exit(err.exit_code)
@@ -453,7 +486,7 @@ def main(argv: list[str] | None = None) -> None:
                        err=True)
         sys.exit(130)
     except RunFailed as err:
-        click.echo(f"sweep: error: {err}", err=True)
+        click.echo(f"sweep: error: {for_command_line(str(err))}", err=True)
         sys.exit(1)
     except Exception as err:  # a failure inside: one line, the traceback on request
         if debugging():

@@ -66,10 +66,23 @@ def sample_parameters(sweep: Sweep) -> np.ndarray:
     return np.array(list(itertools.product(*values)), dtype=float).T
 
 
-def warm_up(sweep: Sweep) -> None:
-    """Run the kernel on the sample points (compiling it on a first run)."""
+def compile_groups(sweep: Sweep, params: np.ndarray) -> list[list[int]]:
+    """The sample points (columns of ``params``) by the values of the parameters whose
+    values run code of their own (``compiles_apart``): each group compiles its own entry
+    points, so the groups can be compiled side by side."""
+    rows = [row for row, p in enumerate(sweep.mechanism.parameters) if p.compiles_apart]
+    groups: dict[tuple, list[int]] = {}
+    for column in range(params.shape[1]):
+        groups.setdefault(tuple(params[rows, column]), []).append(column)
+    return list(groups.values())
+
+
+def warm_up(sweep: Sweep, columns: list[int] | None = None) -> None:
+    """Run the kernel on the sample points, or on those columns of them (compiling it on
+    a first run)."""
+    params = sample_parameters(sweep)
     with numba_without_blas():
-        sweep.kernel(sample_parameters(sweep), sweep.method_record)
+        sweep.kernel(params if columns is None else params[:, columns], sweep.method_record)
 
 
 #: the module numba imports, on its first compile or cache load, to learn whether np.dot

@@ -20,3 +20,26 @@ class UserError(ValueError):
     def __init__(self, message: str):
         text = " ".join(str(message).split())
         super().__init__(_LONG_WORD.sub(_shortened, text))
+
+
+#: the Python API's words for what the command line names otherwise: an argument's name at
+#: the start of a message, and a keyword's value inside it
+_TO_COMMAND_LINE = (
+    (re.compile(r"^path:"), "output:"),
+    (re.compile(r"^variables:"), "vars:"),
+    (re.compile(r"^maximize:"), "--max:"),
+    (re.compile(r"\bmaximize=NAME\b"), "--max NAME"),
+    (re.compile(r"\bminimize=NAME\b"), "--min NAME"),
+    (re.compile(r"\bpass force=True\b"), "use --force"),
+    (re.compile(r"\bpass resume=True\b"), "use --resume"),
+    (re.compile(r"\bforce=True\b"), "--force"),
+    (re.compile(r"\bresume=True\b"), "--resume"),
+)
+
+
+def for_command_line(message: str) -> str:
+    """A message written in the Python API's words (``path:``, ``pass force=True``) in
+    the command line's (``output:``, ``use --force``): one set of messages, two doors."""
+    for pattern, words in _TO_COMMAND_LINE:
+        message = pattern.sub(words, message)
+    return message

@@ -12,6 +12,13 @@ maximised or minimised), computed exactly by ``kernels.pareto``. A pick rule the
 - ``weighted``: the least weighted sum of the scaled objectives.
 
 Ties of a rule go to the first design of the front (ordered by the first objective).
+
+Objective values that agree to a relative tolerance (``tie_tol``, 1e-9 by default, recorded
+in the front) are ties: each objective's candidate values are sorted and cut into runs
+whose neighbours differ by at most ``tie_tol`` times their magnitude, and every value of a
+run stands at the run's least. Round-off (a fixed envelope that comes out as three values
+in its last bits) then neither adds designs to the front nor slows it down: an objective
+left with one value orders no design and is dropped from the dominance check.
 """
 
 from __future__ import annotations
@@ -26,6 +33,8 @@ import xarray as xr
 from sweep.errors import UserError
 
 PICK_RULES = ("knee", "lexicographic", "weighted")
+#: objective values that agree to this relative tolerance are ties (see the docstring)
+TIE_TOL = 1e-9
 FEASIBLE = "feasible"
 OUTSIDE_WHERE = "outside_where"
 
@@ -73,7 +82,8 @@ def objectives(ds: xr.Dataset, maximize=(), minimize=()) -> tuple[Objective, ...
     wanted = [Objective(str(n), "max") for n in _names(maximize, "maximize")] + \
         [Objective(str(n), "min") for n in _names(minimize, "minimize")]
     if not wanted:
-        raise UserError("pareto: give at least one objective (--max NAME or --min NAME)")
+        raise UserError("maximize: give at least one objective (maximize=NAME or "
+                        "minimize=NAME)")
     dims = set(ds["status"].dims)
     numeric = sorted(str(v) for v in ds.variables if set(ds[v].dims) <= dims and ds[v].ndim
                      and "flag_meanings" not in ds[v].attrs and ds[v].dtype.kind in "fiu")
@@ -178,11 +188,33 @@ def values_of(ds: xr.Dataset, objectives_: tuple[Objective, ...]) -> np.ndarray:
     return np.stack(columns, axis=1)
 
 
+def tied(values: np.ndarray, tol: float) -> np.ndarray:
+    """Each column of ``values`` (finite) with the values that agree to ``tol`` made equal:
+    sorted, cut where neighbours differ by more than tol times their magnitude, each run
+    at its least value."""
+    out = np.array(values, dtype=float, copy=True)
+    for j in range(out.shape[1]):
+        order = np.argsort(out[:, j], kind="stable")
+        v = out[order, j]
+        if v.size == 0:
+            continue
+        gap = np.diff(v) > tol * np.maximum(np.abs(v[1:]), np.abs(v[:-1]))
+        runs = np.concatenate(([0], np.cumsum(gap)))
+        starts = np.concatenate(([0], np.flatnonzero(gap) + 1))
+        out[order, j] = v[starts][runs]
+    return out
+
+
 def front(ds: xr.Dataset, maximize=(), minimize=(), where: str | None = None,
-          pick: str = "knee", weights=None, source: str = "") -> Front:
-    """The Pareto front of an atlas's feasible designs and the design ``pick`` names."""
+          pick: str = "knee", weights=None, source: str = "",
+          tie_tol: float = TIE_TOL) -> Front:
+    """The Pareto front of an atlas's feasible designs and the design ``pick`` names;
+    objective values that agree to ``tie_tol`` (relative) are ties."""
     from kernels.pareto import non_dominated
 
+    if isinstance(tie_tol, bool) or not isinstance(tie_tol, (int, float)) \
+            or not 0.0 <= tie_tol < 1e-2:
+        raise UserError(f"tie_tol: a relative tolerance in [0, 0.01), not {tie_tol!r}")
     objectives_ = objectives(ds, maximize, minimize)
     w = pick_weights(pick, weights, objectives_)
     code, reasons = classify(ds, where)
@@ -191,12 +223,17 @@ def front(ds: xr.Dataset, maximize=(), minimize=(), where: str | None = None,
     candidates = np.nonzero(feasible & np.all(np.isfinite(values), axis=1))[0]
     if candidates.size == 0:
         raise UserError("pareto: " + _why_empty(code, reasons, feasible, where))
-    keep = non_dominated(np.ascontiguousarray(values[candidates]))
+    compared = tied(values[candidates], float(tie_tol))
+    varying = [j for j in range(compared.shape[1]) if compared[:, j].min() < compared[:, j].max()]
+    if varying:
+        keep = non_dominated(np.ascontiguousarray(compared[:, varying]))
+    else:  # every objective one value: every candidate is on the front
+        keep = np.arange(candidates.size)
     points = candidates[keep]
     points = points[np.lexsort(values[points].T[::-1])]  # best in the first objective first
     chosen = _pick(values[points], pick, w)
     designs = _selection(ds, points, chosen, objectives_, pick, w, where, len(candidates),
-                         source)
+                         source, float(tie_tol))
     return Front(designs, objectives_, chosen, pick, len(candidates))
 
 
@@ -227,7 +264,8 @@ def _pick(values: np.ndarray, rule: str, weights) -> int:
     return int(np.argmin(np.sqrt(np.sum(s * s, axis=1))))
 
 
-def _selection(ds, points, chosen, objectives_, rule, weights, where, candidates, source):
+def _selection(ds, points, chosen, objectives_, rule, weights, where, candidates, source,
+               tie_tol):
     dims = list(ds["status"].dims)
     index = np.unravel_index(points, ds["status"].shape)
     sel = ds.isel({d: xr.DataArray(index[j], dims="design") for j, d in enumerate(dims)})
@@ -246,7 +284,7 @@ def _selection(ds, points, chosen, objectives_, rule, weights, where, candidates
         if "requirements" in ds.variables else [],
         "pick": rule, "weights": None if weights is None else [float(x) for x in weights],
         "picked_design": int(chosen), "front_designs": int(len(points)),
-        "candidates": int(candidates), "source_atlas": source})
+        "candidates": int(candidates), "source_atlas": source, "tie_tol": tie_tol})
     sel.attrs["title"] = f"Pareto front of {ds.attrs.get('title', 'an atlas')}"
     for name in sel.variables:
         sel[name].encoding = {}

@@ -14,7 +14,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-import sweep as _pkg
 from kernels.status import CODES
 
 if TYPE_CHECKING:
@@ -34,6 +33,14 @@ def package_versions() -> dict[str, str]:
     return out
 
 
+def package_version() -> str:
+    """impact-sweep's installed version (pyproject.toml's)."""
+    try:
+        return metadata.version("impact-sweep")
+    except metadata.PackageNotFoundError:  # run from a checkout that is not installed
+        return "unknown"
+
+
 def code_version() -> str:
     """Package version, plus the git commit (and '-dirty') when run from a checkout."""
     here = Path(__file__).resolve().parent.parent
@@ -41,10 +48,10 @@ def code_version() -> str:
         rev = subprocess.run(["git", "-C", str(here), "describe", "--always", "--dirty",
                               "--abbrev=12"], capture_output=True, text=True, timeout=5)
         if rev.returncode == 0 and rev.stdout.strip():
-            return f"{_pkg.__version__}+git.{rev.stdout.strip()}"
+            return f"{package_version()}+git.{rev.stdout.strip()}"
     except (OSError, subprocess.SubprocessError):
         pass
-    return _pkg.__version__
+    return package_version()
 
 
 def status_attributes(mech) -> dict:
@@ -132,11 +139,12 @@ def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
         Conventions=CONVENTIONS,
         title=sweep.title,
         institution="impact-sweep",
-        source=f"impact-sweep {_pkg.__version__}, mechanism {mech.name}",
+        source=f"impact-sweep {package_version()}, mechanism {mech.name}",
         references=mech.references,
         mechanism=mech.name,
         spec=sweep.spec_json(),
         requirements=json.dumps([limit.text for limit in sweep.requirements]),
+        notes=json.dumps(list(sweep.notes)),
         **({"source_atlas": json.dumps(sweep.designs.provenance)} if sweep.designs else {}),
         method=json.dumps({"model": mech.summary, **sweep.method}),
         package_versions=json.dumps(package_versions()),
@@ -151,9 +159,10 @@ def history_line(argv: list[str] | None = None) -> str:
     return f"{now}: {args}"
 
 
-def file_status_counts(path) -> dict[str, int]:
-    """How many points of an atlas file carry each status meaning, read with netCDF4 alone
-    (a run's summary needs no xarray)."""
+def file_status_counts(path) -> tuple[dict[str, int], set[str]]:
+    """How many points of an atlas file carry each status meaning, and which meanings are
+    usable designs (usable_flags), read with netCDF4 alone (a run's summary needs no
+    xarray)."""
     import netCDF4
 
     with netCDF4.Dataset(path) as nc:
@@ -162,4 +171,18 @@ def file_status_counts(path) -> dict[str, int]:
         values = [int(v) for v in np.atleast_1d(status.flag_values)]
         counts = np.bincount(np.asarray(status[...], dtype=np.int64).ravel(),
                              minlength=max(CODES.values()) + 1)
-        return {m: int(counts[v]) for v, m in zip(values, status.flag_meanings.split())}
+        usable = set(getattr(status, "usable_flags", "ok").split())
+        return ({m: int(counts[v]) for v, m in zip(values, status.flag_meanings.split())},
+                usable)
+
+
+def status_summary(counts: dict[str, int], usable: set[str]) -> str:
+    """``usable designs: ok 40,432, special_position 1,786; no design: not_assemblable
+    1,454``: the statuses that carry design values apart from those that do not."""
+    def listed(names):
+        return ", ".join(f"{m} {counts[m]:,}" for m in names if counts[m])
+
+    good = listed(m for m in counts if m in usable)
+    bad = listed(m for m in counts if m not in usable)
+    return "; ".join(part for part in (f"usable designs: {good or 'none'}",
+                                       f"no design: {bad}" if bad else "") if part)

@@ -24,7 +24,7 @@ MECHANISMS = {
     "six_link": "kernels.six_link",
     "spring_balancer": "kernels.balancer",
     "rotary_pendulum": "kernels.rotary_pendulum",
-    "impact_machine": "kernels.machine",
+    "impact_machine": "kernels.impact_machine",
 }
 
 

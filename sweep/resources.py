@@ -78,15 +78,13 @@ def estimate(points: int, rows_per_point: int, flag_rows: int, parameters: int,
 
 
 def available_memory() -> int | None:
-    """Bytes of memory available to a new allocation (Linux MemAvailable), or None."""
+    """Bytes of memory available to a new allocation (psutil's ``available``), or None."""
+    import psutil
+
     try:
-        with open("/proc/meminfo", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    return None
+        return int(psutil.virtual_memory().available)
+    except (OSError, RuntimeError):
+        return None
 
 
 def free_disk(folder: Path) -> int | None:
@@ -123,7 +121,7 @@ def check_name(path: Path) -> None:
         limit = 255
     size = len(os.fsencode(path.name))
     if size + NAME_ROOM > limit:
-        raise UserError(f"output: the file name is {size} bytes long; at most "
+        raise UserError(f"path: the file name is {size} bytes long; at most "
                         f"{limit - NAME_ROOM} here (the run keeps its blocks and lock beside "
                         "it under longer names)")
 
@@ -141,33 +139,68 @@ _HELD: set[str] = set()
 def target_lock(target: Path):
     """Hold the lock on ``target`` for the block's life, or refuse: another live process
     holds it (named by its process id). A lock left by a process that died is free: the
-    kernel released it with the process, and this run takes it over."""
+    kernel released it with the process, and this run takes it over. The lock file is
+    removed when the run ends, however it ends, and by no failure left behind. (filelock's
+    Unix lock keeps its file on purpose: removing it lets a process that opened the old
+    file lock a deleted inode while another locks a new one; here the lock is checked to
+    be the path's file after it is taken, and taken again where the path moved on.)"""
     path = lock_path(target)
     key = str(path.resolve())
     if key in _HELD:
         yield
         return
-    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    fd = _locked_fd(path, target)
     try:
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as err:
-            if err.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                raise
-            holder = os.pread(fd, 64, 0).decode("ascii", "replace").strip() or "unknown"
-            raise UserError(f"output: another run (process {holder}) is writing {target}; "
-                            "wait for it to finish, or stop it first") from None
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         _HELD.add(key)
         try:
             yield
         finally:
             _HELD.discard(key)
-            with contextlib.suppress(OSError):
-                os.unlink(path)
     finally:
+        with contextlib.suppress(OSError):
+            os.unlink(path)
         os.close(fd)  # releases the lock
+
+
+def _locked_fd(path: Path, target: Path) -> int:
+    """An open file descriptor of ``path`` holding its lock, with this process's id in it;
+    a UserError naming the holder where another live process has it; RunFailed (and no
+    file left) where it cannot be written."""
+    for _ in range(100):
+        created = not path.exists()
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as err:
+            raise RunFailed(f"path: cannot lock {target}: "
+                            f"{disk_failure(err) or err.strerror or err}") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as err:
+            holder = os.pread(fd, 64, 0).decode("ascii", "replace").strip() or "unknown"
+            os.close(fd)
+            if err.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                raise
+            raise UserError(f"path: another run (process {holder}) is writing {target}; "
+                            "wait for it to finish, or stop it first") from None
+        try:
+            if os.fstat(fd).st_ino != os.stat(path).st_ino:
+                os.close(fd)  # the file was removed (its run ended) after we opened it
+                continue
+        except FileNotFoundError:
+            os.close(fd)
+            continue
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        except OSError as err:
+            if created:
+                with contextlib.suppress(OSError):
+                    os.unlink(path)
+            os.close(fd)
+            raise RunFailed(f"path: cannot lock {target}: "
+                            f"{disk_failure(err) or err.strerror or err}") from None
+        return fd
+    raise RunFailed(f"path: cannot lock {target}: its lock file keeps changing")
 
 
 def remove_stale_temporaries(target: Path) -> None:

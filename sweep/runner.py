@@ -44,9 +44,7 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
 
     path = Path(path)
     sweep = sweep.with_run(chunk=chunk, workers=workers, scheduler=scheduler)
-    plan = engine.Plan(sweep)
-    need = run_estimate(sweep, plan)
-    resources.check_fits(need, path.parent if str(path.parent) else Path("."))
+    plan, need = check_run(sweep, path)
     if progress and (need.store > resources.ANNOUNCE_BYTES or sweep.size >= 10**7):
         print(f"sweep: {need.text()}", file=sys.stderr, flush=True)
     with resources.target_lock(path):
@@ -64,6 +62,18 @@ def run_sweep(sweep, path: Path, chunk: int | None = None, workers: int | None =
                 client.close()
         store.discard()
     return {"blocks": plan.n_blocks, "reused": len(store.done)}
+
+
+def check_run(sweep, path: Path):
+    """(the plan, the Estimate) of a run of ``sweep`` (its run settings final) into
+    ``path``, refused where it cannot fit on the target's disk or in memory: before the
+    target is locked or anything is written."""
+    from sweep import resources
+
+    plan = engine.Plan(sweep)
+    need = run_estimate(sweep, plan)
+    resources.check_fits(need, path.parent if str(path.parent) else Path("."))
+    return plan, need
 
 
 def run_estimate(sweep, plan):
@@ -95,7 +105,7 @@ def kept_on_failure(store, path: Path):
         if meaning is None:
             raise
         raise resources.RunFailed(
-            f"output: cannot write {path}: {meaning}; {_kept(store)} in {store.folder}; "
+            f"path: cannot write {path}: {meaning}; {_kept(store)} in {store.folder}; "
             "`--resume` continues once there is room") from None
 
 
@@ -185,20 +195,42 @@ def compile_first(sweep, announce: bool) -> None:
     """Compile the kernels the sweep needs (engine.warm_up) before the blocks start, and
     say so when it takes long: numba compiles on a first run (tens of seconds for the
     pendulum's integration core), and the cache makes later runs start at once. Without
-    this the progress bar would sit at 0 for that time."""
+    this the progress bar would sit at 0 for that time. Where the spec needs several entry
+    points (engine.compile_groups) and the first is not in the cache, the others compile
+    meanwhile in processes of their own (warmup.compile_in_parallel), one per core."""
     started = time.perf_counter()
-    with cf.ThreadPoolExecutor(max_workers=1) as pool:
-        compiling = pool.submit(engine.warm_up, sweep)
+    params = engine.sample_parameters(sweep)
+    groups = engine.compile_groups(sweep, params)
+    with cf.ThreadPoolExecutor(max_workers=3) as pool:
+        compiling = pool.submit(engine.warm_up, sweep, groups[0])
         try:
             compiling.result(timeout=COMPILE_NOTICE_AFTER)
+            if len(groups) > 1:
+                engine.warm_up(sweep)
             return
         except cf.TimeoutError:
-            if not announce:
-                compiling.result()
-                return
-        _wait_with_clock(compiling, "compiling kernels (first run only; cached for later "
-                                    "runs)")
-    print(f"compiled in {time.perf_counter() - started:.0f} s", file=sys.stderr, flush=True)
+            pass
+        if len(groups) > 1:
+            from sweep import warmup
+
+            others = pool.submit(warmup.compile_in_parallel, sweep, groups[1:],
+                                 max(1, warmup.cores() - 1))
+            compiling = pool.submit(_after, compiling, others, sweep)
+        if announce:
+            _wait_with_clock(compiling, "compiling kernels (first run only; cached for later "
+                                        "runs)")
+        compiling.result()
+    if announce:
+        print(f"compiled in {time.perf_counter() - started:.0f} s", file=sys.stderr,
+              flush=True)
+
+
+def _after(first, others, sweep) -> None:
+    """The first group compiled here and the others in their processes: all of them
+    loaded here."""
+    first.result()
+    others.result()
+    engine.warm_up(sweep)
 
 
 def _wait_with_clock(future, label: str):

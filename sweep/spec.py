@@ -122,6 +122,9 @@ class Sweep:
     source: dict = field(default_factory=dict)  # the document as given (+ run overrides)
     requirements: tuple = ()  # the limits a design must meet (sweep.requirements.Limit)
     designs: Any = None  # a chained sweep's resolved source (sweep.chains.Designs)
+    #: what the run does that the spec did not say in so many words, one line each: said
+    #: at the start of a run and recorded in the atlas (``notes``)
+    notes: tuple = ()
 
     def __reduce__(self):
         # rebuilt from the document it came from (deterministic), e.g. on a cluster worker;
@@ -136,13 +139,16 @@ class Sweep:
     @classmethod
     def from_dict(cls, document) -> Sweep:
         """A spec document as a dict (the TOML's tables as dicts), validated:
-        ``Sweep.from_dict({"mechanism": "crank_rocker", "grid": {"R": [0.2, 0.3]}})``."""
+        ``Sweep.from_dict({"mechanism": "crank_rocker", "grid": {"R": [0.2, 0.3]}})``.
+        Python's own sequences stand for TOML's arrays: a grid axis may be a list, a
+        tuple, a range or a numpy array (``np.linspace(0.1, 0.4, 7)``), and numpy's
+        numbers are numbers."""
         if not isinstance(document, dict):
             try:
                 document = dict(document)
             except (TypeError, ValueError):
                 raise UserError("spec: a dict of the spec's tables") from None
-        return validate(document)
+        return validate(plain(document))
 
     @classmethod
     def from_text(cls, text: str) -> Sweep:
@@ -236,6 +242,20 @@ def load(path: str | Path) -> Sweep:
     return parse(text, source=str(path))
 
 
+def plain(value):
+    """A spec document from Python with TOML's types: tuples, ranges and numpy arrays as
+    lists, numpy's scalars as Python's, tables as dicts (recursively)."""
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return plain(value.tolist())
+    if isinstance(value, (list, tuple, range)):
+        return [plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
 def validate(raw: dict, designs=None) -> Sweep:
     """A spec document (as read from TOML) -> a Sweep, or a one-line UserError.
     ``designs``: a chained sweep's source already resolved (sweep.chains.Designs)."""
@@ -257,6 +277,8 @@ def _validate(raw: dict, designs=None) -> Sweep:
     given = _given(model, mech, axes, method)
     _where_used(mech, given, method)
     outputs = _outputs(model, mech, axes, record)
+    outputs, notes = _with_required_outputs(model, mech, outputs)
+    notes += designs.notes if designs is not None else ()
     given["outputs"] = set(outputs)
     _mechanism_rules(mech, given)
     record = record._replace(outputs=tuple(outputs))
@@ -278,7 +300,7 @@ def _validate(raw: dict, designs=None) -> Sweep:
     if limits:
         spec["requirements"] = dict(model.requirements)
     return Sweep(mech, kernel.run, axes, fixed, outputs, method, record, model.run,
-                 model.chart, spec["title"], spec, raw, limits, designs)
+                 model.chart, spec["title"], spec, raw, limits, designs, notes)
 
 
 def _pydantic_message(err: ValidationError) -> str:
@@ -571,6 +593,22 @@ def _outputs(model: SpecModel, mech: Mechanism, axes: list[Axis], record) -> lis
             raise UserError("outputs: repeated names")
         wanted = list(model.outputs)
     return [name for name in wanted if name not in echoes]
+
+
+def _with_required_outputs(model: SpecModel, mech: Mechanism,
+                           outputs: list[str]) -> tuple[list[str], tuple]:
+    """The outputs with each one a requirement names added where the spec's ``outputs``
+    leave it out (the atlas then holds what its requirements read), and a note of it."""
+    from sweep import requirements
+
+    numeric = requirements.numeric_outputs(mech)
+    missing = [name for name in dict.fromkeys(model.requirements)
+               if name in numeric and name not in outputs]
+    if not missing:
+        return outputs, ()
+    them = "it" if len(missing) == 1 else "them"
+    return outputs + missing, (f"outputs: {', '.join(missing)} added to the atlas (a "
+                               f"requirement reads {them})",)
 
 
 def _requirements(model: SpecModel, mech: Mechanism, record) -> tuple:

@@ -24,30 +24,46 @@ from sweep.errors import UserError
 from sweep.metadata import code_version
 
 
-def check_target(path: Path, force: bool, suffix: str = ".nc") -> None:
-    """Refuse, before any compute, to overwrite a file without ``force``, or to write where
-    we cannot: a wrong suffix, an empty or too long name, a missing or read-only folder, a
-    file system that does not take new files (/proc). The folder is tried by creating and
-    removing a file in it."""
+def same_file(a, b) -> bool:
+    """Whether two paths name one file (links and relative names resolved)."""
+    a, b = Path(a), Path(b)
+    try:
+        if a.exists() and b.exists():
+            return os.path.samefile(a, b)
+        return a.resolve() == b.resolve()
+    except OSError:
+        return False
+
+
+def check_target(path: Path, force: bool, suffix: str = ".nc", inputs=()) -> None:
+    """Refuse, before any compute, to overwrite a file without ``force``, to write over one
+    of the command's ``inputs`` (force or not), or to write where we cannot: a wrong
+    suffix, an empty or too long name, a missing or read-only folder, a file system that
+    does not take new files (/proc). The folder is tried by creating and removing a file
+    in it."""
     from sweep.resources import check_name
 
     if not path.name or str(path) in (".", ""):
-        raise UserError(f"output: an empty file name; give one ending in {suffix}")
+        raise UserError(f"path: an empty file name; give one ending in {suffix}")
     if path.suffix != suffix:
-        raise UserError(f"output: {path} must end in {suffix}")
+        raise UserError(f"path: {path} must end in {suffix}")
+    check_name(path)  # before any look at the path: a name too long fails every call on it
+    for source in inputs:
+        if source and same_file(path, source):
+            raise UserError(f"path: {path} is this command's input {source}; write to "
+                            "another file (force=True never overwrites an input)")
     if path.is_dir():
-        raise UserError(f"output: {path} is a directory")
+        raise UserError(f"path: {path} is a directory")
     if path.exists() and not force:
-        raise UserError(f"output: {path} exists; use --force to overwrite it")
+        raise UserError(f"path: {path} exists; pass force=True to overwrite it")
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
-        raise UserError(f"output: directory {parent} does not exist")
-    check_name(path)
+        raise UserError(f"path: directory {parent} does not exist")
     try:
         with tempfile.NamedTemporaryFile(dir=parent, prefix=".sweep-probe-"):
             pass
     except OSError as err:
-        raise UserError(f"output: cannot write in {parent} ({err.strerror or err})") from None
+        raise UserError(f"path: cannot write in {parent} ({err.strerror or err})") from None
 
 
 def partial_dir(path: Path) -> Path:
@@ -79,19 +95,19 @@ def open_partial(folder: Path, manifest: dict, compared: dict, resume: bool,
             try:
                 old = json.loads((folder / "manifest.json").read_text())
             except (OSError, ValueError):
-                raise UserError(f"resume: {folder} has no readable manifest; rerun with "
-                                "--force to start over") from None
+                raise UserError(f"resume: {folder} has no readable manifest; run again with "
+                                "force=True to start over") from None
             for key, what in compared.items():
                 if old.get(key) != manifest[key]:
                     changed = ""
                     if key == "spec":
                         changed = " (" + ", ".join(spec_changes(old.get(key), manifest[key])) + ")"
                     raise UserError(f"resume: the interrupted run used a different {what}"
-                                    f"{changed}; rerun with --force to start over")
+                                    f"{changed}; run again with force=True to start over")
             return True
         if not force:
-            raise UserError(f"output: an interrupted run left {folder}; use --resume to "
-                            "continue it or --force to start over")
+            raise UserError(f"path: an interrupted run left {folder}; pass resume=True to "
+                            "continue it or force=True to start over")
         shutil.rmtree(folder)
     elif resume:
         raise UserError(f"resume: nothing to resume at {folder}")

@@ -23,7 +23,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from kernels.impact.impact_map import radical_inverse  # the kernel's starts, as stated
+from kernels.impact.attractors import radical_inverse  # the kernel's starts, as stated
 from tests.pendulum_twins import beta, h_ratio as h, h_slope, rigid_acceleration
 
 TWO_PI = 2.0 * math.pi

@@ -4,9 +4,82 @@ import math
 
 import numpy as np
 import pytest
+from numba.core import event as numba_event
 
 from kernels.status import MEANINGS
 from sweep import registry
+
+def pytest_addoption(parser):
+    parser.addoption("--no-warmup", action="store_true", default=False,
+                     help="start the tests without compiling ahead what they need "
+                          "(tests/warmup.py)")
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionstart(session):
+    """Compile what the tests need before they start, in parallel processes, each entry
+    point once (tests/warmup.py), where the whole suite or its fast loop runs (not a file
+    or a test named on the command line): the workers then load it from the cache."""
+    config = session.config
+    if (hasattr(config, "workerinput") or config.getoption("no_warmup")
+            or config.option.collectonly or config.option.keyword
+            or config.args_source != pytest.Config.ArgsSource.TESTPATHS):
+        return
+    from tests import warmup
+
+    reporter = config.pluginmanager.get_plugin("terminalreporter")
+    say = reporter.write_line if reporter is not None else print
+    warmup.before_tests(slow="not slow" not in (config.option.markexpr or ""), say=say)
+
+
+class _CachedCompiles(numba_event.Listener):
+    """numba's compile events of cached functions in this process: what the warm-up left
+    to the tests (each worker reports its list; a kernel compiled on two workers was
+    compiled twice)."""
+
+    def __init__(self):
+        self.names, self.depth = set(), 0
+
+    def on_start(self, e):
+        self.depth += 1
+        d = e.data["dispatcher"]
+        if self.depth == 1 and d._cache.__class__.__name__ != "NullCache":
+            self.names.add(f"{d.py_func.__module__}.{d.py_func.__qualname__}")
+
+    def on_end(self, e):
+        self.depth -= 1
+
+
+_COMPILES = _CachedCompiles()
+numba_event.register("numba:compile", _COMPILES)
+
+
+def pytest_sessionfinish(session):
+    workeroutput = getattr(session.config, "workeroutput", None)
+    if workeroutput is not None:
+        workeroutput["cached_compiles"] = sorted(_COMPILES.names)
+
+
+def pytest_testnodedown(node, error):
+    seen = node.config.stash.setdefault(_COMPILED_BY, {})
+    for name in getattr(node, "workeroutput", {}).get("cached_compiles", []):
+        seen.setdefault(name, []).append(node.gateway.id)
+
+
+_COMPILED_BY = pytest.StashKey[dict]()
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    by_worker = config.stash.get(_COMPILED_BY, None)
+    if by_worker is None:  # one process: its own list
+        by_worker = {name: ["main"] for name in _COMPILES.names}
+    twice = sorted(name for name, workers in by_worker.items() if len(workers) > 1)
+    if by_worker:
+        terminalreporter.write_line(
+            f"cached kernels compiled during the tests: {len(by_worker)}"
+            + (f"; on more than one worker (add them to tests/warmup.py): {', '.join(twice)}"
+               if twice else ""))
+
 
 R03 = 0.3
 GAMMA03 = 13.0 / 7.0  # (1 + R)/(1 - R) at R = 0.3

@@ -1,6 +1,7 @@
 """Python handles on the integration core, for tests and benchmarks: the core's functions
 are numba closures with no Python wrapper (kernels/__init__.py), so each probe is a small
-jitted function around one of them, built (and compiled) on first use.
+jitted function around one of them, built on first use and cached on disk as the kernels
+are (``cached``: the first process that calls it compiles it, the others load it).
 
 ``SYSTEMS``: every model x tool as a Contact, by (model, tool) name, with the test-defined
 ``relative_stop`` (tests/stop_tool.py) beside the mechanism's two tools.
@@ -11,17 +12,24 @@ from functools import cache
 import numpy as np
 from numba import njit
 
+from kernels.cache import module_level
 from kernels.impact.impact_map import SPEED_EPS, make_impact_map
 from kernels.impact.tangent import DPSI, DW, make_tracker
 from kernels.impact.outcomes import FLIGHT_EVENT, Settings
 from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5, METHOD_RK4, make_stepper
-from kernels.pendulum import models, tools
+from kernels.pendulum import blade, models, tools
 from tests.stop_tool import relative_stop
 
 MODELS = {"paper": models.PAPER, "rigid": models.RIGID, "rotor": models.ROTOR}
-TOOLS = {"rotor_stop": tools.rotor_stop, "lab_window": tools.lab_window,
+TOOLS = {"rotor_stop": tools.rotor_stop, "lab_window": blade.lab_window,
          "relative_stop": relative_stop}
 METHODS = {"rk4": METHOD_RK4, "dopri5": METHOD_DOPRI5, "dop853": METHOD_DOP853}
+
+
+def cached(probe, *key: str):
+    """The probe as a module-level function named by ``key`` (the probe's factory and its
+    arguments), which numba caches on disk (kernels.cache.module_level)."""
+    return module_level(probe, "_".join(("probe",) + key), globals(), dict(cache=True))
 
 
 @cache
@@ -44,7 +52,7 @@ def flight(model: str, tool: str):
     def probe(t, y, p, data, s, refine):
         return fly(t, y, p, data, s, refine)
 
-    return probe
+    return cached(probe, "flight", model, tool)
 
 
 def fixed_steps_of(rhs, scales):
@@ -66,7 +74,8 @@ def fixed_steps_of(rhs, scales):
 @cache
 def fixed_steps(model: str):
     """fixed_steps_of a model's free motion."""
-    return fixed_steps_of(MODELS[model].rhs, MODELS[model].scales)
+    return cached(fixed_steps_of(MODELS[model].rhs, MODELS[model].scales), "fixed_steps",
+                  model)
 
 
 @cache
@@ -78,7 +87,7 @@ def restitute(model: str, tool: str):
     def probe(t, y, data, p, r):
         return law(t, y, data, p, r)
 
-    return probe
+    return cached(probe, "restitute", model, tool)
 
 
 @cache
@@ -107,7 +116,7 @@ def chatter(model: str, tool: str):
             t, y = restitute(t, y, data, p, r)
         return False, max_impacts, t, y, -1, -1
 
-    return probe
+    return cached(probe, "chatter", model, tool)
 
 
 @cache
@@ -121,7 +130,7 @@ def zeno(model: str, tool: str):
         o = hit(t, y, data, p, r, s, False)
         return o[0], o[1], o[2], o[3], o[4], o[5], o[6], o[7], o[8]
 
-    return probe
+    return cached(probe, "zeno", model, tool)
 
 
 @cache
@@ -195,7 +204,7 @@ def section_jacobian(model: str, tool: str):
                     dpsi += delta
                 phi, t2 = rotor_angle(t, y), t
                 if blade:
-                    phi = data[3] - tools.beta(psi, data[2])
+                    phi = data[3] - blade.beta(psi, data[2])
                     if driven:
                         t2 = phi
                 t2, y2 = compose(t2, phi, w, psi, dpsi)
@@ -207,7 +216,7 @@ def section_jacobian(model: str, tool: str):
                 differenced[i, j] = (ends[0, i] - ends[1, i]) / (2.0 * eps)
         return ok and carried_ok, period, carried, differenced
 
-    return probe
+    return cached(probe, "section_jacobian", model, tool)
 
 
 @cache
@@ -219,7 +228,7 @@ def leading_multiplier():
     def probe(a, d):
         return lead(a, d)
 
-    return probe
+    return cached(probe, "leading_multiplier")
 
 
 @cache
@@ -289,7 +298,7 @@ def follow(model: str, tool: str):
             rows[n, 5] = 1.0 if ok else 0.0
         return rows
 
-    return probe
+    return cached(probe, "follow", model, tool)
 
 
 @cache
@@ -325,7 +334,7 @@ def accumulation(model: str):
             ends[side] = coordinates(o[9], o[10])
         return tangent[:, 0].copy(), (ends[0] - ends[1]) / (2.0 * eps)
 
-    return probe
+    return cached(probe, "accumulation", model)
 
 
 @cache
@@ -358,4 +367,4 @@ def impacts_from_rest(model: str, tool: str):
             before = key
         return -1, before
 
-    return probe
+    return cached(probe, "impacts_from_rest", model, tool)

@@ -23,7 +23,7 @@ from numba import njit
 from kernels import INLINE_OPTIONS
 from kernels.impact import Contact, System
 from kernels.impact.flight import make_flight
-from kernels.impact.impact_map import radical_inverse
+from kernels.impact.attractors import radical_inverse
 from kernels.impact.outcomes import NO_COST
 from kernels.pendulum.tools import never, no_edge, no_slope, stop_flight
 

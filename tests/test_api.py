@@ -130,7 +130,7 @@ def test_chart_and_profile_give_figures_and_save_them(tmp_path, memory_atlas):
     fig = sweep.chart(memory_atlas, "R", "largest_link", "impact_transfer_ratio",
                       path=tmp_path / "c.png")
     assert isinstance(fig, Figure) and (tmp_path / "c.png").stat().st_size > 10_000
-    with pytest.raises(sweep.UserError, match="^output:"):
+    with pytest.raises(sweep.UserError, match="^path:"):
         sweep.chart(memory_atlas, "R", "largest_link", "impact_speed", path=tmp_path / "c.jpg")
     forces = sweep.run({"mechanism": "linkage_forces", "grid": {"omega1": [20.0, 30.0]},
                         "method": {"profile_points": 73}})
@@ -213,5 +213,5 @@ def test_run_with_a_path_writes_the_chart_of_the_spec(tmp_path):
     atlas = sweep.run(spec, Path(tmp_path) / "cr.nc")
     atlas.close()
     assert (tmp_path / "cr.png").is_file() and (tmp_path / "cr.bounds.nc").is_file()
-    with pytest.raises(sweep.UserError, match="^output: .* exists"):
+    with pytest.raises(sweep.UserError, match="^path: .* exists; pass force=True"):
         sweep.run(spec, tmp_path / "cr.nc")

@@ -135,7 +135,7 @@ def test_resume_refuses_a_different_spec(tmp_path, monkeypatch):
     other = spec.parse(SPEC.replace("num = 13", "num = 14"))
     with pytest.raises(UserError, match="different spec"):
         runner.run_sweep(other, target, chunk=50, progress=False, resume=True)
-    with pytest.raises(UserError, match="--resume"):
+    with pytest.raises(UserError, match="pass resume=True"):
         runner.run_sweep(s, target, chunk=50, progress=False)  # neither resume nor force
 
 

@@ -96,6 +96,7 @@ def test_auto_costs_at_most_1_3_times_one_solve_at_the_accuracy_it_delivers(roto
     assert np.max(errors(out, ref)) <= 2 * max(np.max(errors(one, ref)), 10 * finer)
 
 
+@pytest.mark.slow  # the only user of DOP853 on the rotor stop with two stages
 def test_at_tight_tol_auto_integrates_by_dop853_meets_tol_and_pays_less(rotor_sweep,
                                                                       monkeypatch):
     """Issue 40. At tol 1e-10 (below AUTO_DOP853_BELOW) auto takes DOP853: every design of

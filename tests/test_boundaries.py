@@ -261,7 +261,7 @@ def test_bad_input_is_one_line_with_exit_2_before_any_compute(tmp_path, capsys, 
              (["--tol", "0"], "tol: must be a number > 0"),
              (["--tol", "-1e-8"], "tol: must be a number > 0"),
              (["--tol", "nan"], "tol: must be a number > 0"),
-             (["-o", str(path)], "output: would overwrite the atlas itself")]
+             (["-o", str(path)], "is this command's input")]
     for args, message in cases:
         with pytest.raises(SystemExit) as exit_:
             cli.main(["boundaries", str(path), *args])

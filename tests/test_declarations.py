@@ -42,13 +42,50 @@ def test_each_kernel_emits_exactly_the_statuses_it_declares(name):
     assert _status_names_used(path) == set(kernel.declaration.status)
 
 
-def test_no_magic_indices_for_parameters_or_outputs_in_kernels():
-    pattern = re.compile(r"\b(out|outputs|params|pr|method|row|rows|prof|case|geo|vals)"
-                         r"\[\s*\d")
-    hits = [f"{path.name}:{n}: {line.strip()}"
-            for path in sorted((ROOT / "kernels").rglob("*.py"))
-            for n, line in enumerate(path.read_text().splitlines(), 1) if pattern.search(line)]
+#: names a literal index may follow in kernels/: vectors and arrays of the numerics, where
+#: index 0 and 1 are components of one quantity, not fields of a record: states and their
+#: derivatives (y, dy, f, s, ...), 2-vectors and row-major 2 x 2 matrices of the section
+#: map's accelerators, coefficient arrays, an array's first or last element, the tangent's
+#: 3 x 3 block, RK stages; and Python lists in a declaration's messages. A record (the
+#: machine's data, a linkage point, a method's options, a node) is read by name.
+VECTORS = {
+    "y", "y0", "y1", "dy", "f", "f0", "f1", "s", "s1", "ds", "x", "x0", "x1", "v", "to",
+    "step", "fixed", "x_from", "x_secant", "jac", "a", "b", "c", "d", "key", "here",
+    "canonical", "history", "half", "ap", "av", "aw", "k1", "k2", "k3", "k4", "ks",
+    "coefficients", "args", "types", "mean", "largest", "values", "order", "front",
+    "impacts", "mag", "real", "nonzero", "below", "gam", "zr", "zi", "ir", "ii", "jr", "ji",
+    "nr", "ni", "dr", "di", "missing", "extra", "status"}
+
+
+def literal_indices(path: Path) -> list[str]:
+    """``name[<literal>]`` in a file's code (comments and strings left out), for every name
+    outside VECTORS and every attribute but ``shape``, each as "file:line: code"."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if not isinstance(node, ast.Subscript):
+            continue
+        index = node.slice.elts if isinstance(node.slice, ast.Tuple) else [node.slice]
+        if not any(isinstance(i, ast.Constant) and isinstance(i.value, int)
+                   or isinstance(i, ast.UnaryOp) and isinstance(i.operand, ast.Constant)
+                   for i in index):
+            continue
+        value = node.value
+        name = value.id if isinstance(value, ast.Name) else \
+            value.attr if isinstance(value, ast.Attribute) else None
+        if name is not None and name not in VECTORS and name != "shape":
+            found.append(f"{path.name}:{node.lineno}: {ast.unparse(node)}")
+    return found
+
+
+def test_no_literal_slot_index_in_kernels(tmp_path):
+    """Records are read by name: no literal index into a record anywhere in kernels/ (the
+    machine's 33-slot tuple read as m[0] ... m[30] failed this). A planted read fails it."""
+    hits = [hit for path in sorted((ROOT / "kernels").rglob("*.py"))
+            for hit in literal_indices(path)]
     assert not hits, hits
+    planted = tmp_path / "planted.py"
+    planted.write_text("def f(m, nd, y, a):\n    return m[3] + nd[0] + y[1] + a.shape[1]\n")
+    assert len(literal_indices(planted)) == 2
 
 
 def _imports(path: Path, package: str) -> set[str]:
@@ -62,9 +99,12 @@ def _imports(path: Path, package: str) -> set[str]:
     return found
 
 
-def test_sweep_has_no_import_cycles():
-    modules = {f"sweep.{p.stem}": p for p in (ROOT / "sweep").glob("*.py")}
-    graph = {m: {i for i in _imports(p, "sweep") if i in modules and i != m}
+def import_cycles(package: str) -> dict:
+    """The modules of a package (its subpackages included) that reach themselves through
+    the package's own imports (lazy ones included), with what each imports."""
+    modules = {".".join(p.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): p
+               for p in (ROOT / package).rglob("*.py")}
+    graph = {m: {i for i in _imports(p, package) if i in modules and i != m}
              for m, p in modules.items()}
 
     def reach(start):
@@ -76,8 +116,13 @@ def test_sweep_has_no_import_cycles():
                     todo.append(nxt)
         return seen
 
-    cycles = [m for m in graph if m in reach(m)]
-    assert not cycles, {m: graph[m] for m in cycles}
+    return {m: graph[m] for m in graph if m in reach(m)}
+
+
+@pytest.mark.parametrize("package", ["sweep", "kernels"])
+def test_each_package_imports_without_cycles(package):
+    """The package imports only downward: no module reaches itself through imports."""
+    assert import_cycles(package) == {}
 
 
 def test_a_toy_mechanism_needs_one_declaration_one_kernel_and_one_registry_line(

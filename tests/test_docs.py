@@ -23,9 +23,10 @@ def code_blocks(path: Path) -> list[tuple[str, str]]:
             if kind != "toml" or FILE.match(body)]
 
 
-def run_blocks(blocks, where: Path) -> None:
+def run_blocks(blocks, where: Path, no_overwrite: bool = False) -> None:
     """Python blocks in one namespace, bash blocks line by line (continuations joined),
-    all in ``where``; the first failure fails the test with the block that failed."""
+    all in ``where``; the first failure fails the test with the block that failed. With
+    ``no_overwrite``, a block that writes over a file an earlier one wrote fails too."""
     env = dict(os.environ, PATH=f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}",
                MPLBACKEND="Agg")
     namespace: dict = {}
@@ -33,22 +34,32 @@ def run_blocks(blocks, where: Path) -> None:
     os.chdir(where)
     try:
         for kind, body in blocks:
-            if kind == "toml":
-                (where / FILE.match(body).group(1)).write_text(body, encoding="utf-8")
-                continue
-            if kind == "python":
-                exec(compile(body, "<doc block>", "exec"), namespace)  # noqa: S102
-                continue
-            command = body.replace("\\\n", " ")
-            for line in command.splitlines():
-                line = line.split("  #")[0].strip()
-                if not line or line.startswith("#"):
-                    continue
-                done = subprocess.run(line, shell=True, cwd=where, env=env,
-                                      capture_output=True, text=True)
-                assert done.returncode == 0, f"{line}\n{done.stderr}"
+            before = {p.name: p.stat().st_mtime_ns for p in where.iterdir()}
+            _run_block(kind, body, where, env, namespace)
+            if no_overwrite:
+                again = [p.name for p in where.iterdir()
+                         if p.name in before and p.stat().st_mtime_ns != before[p.name]]
+                assert not again, f"{again} written again by:\n{body}"
     finally:
         os.chdir(cwd)
+
+
+def _run_block(kind, body, where, env, namespace) -> None:
+    """One block: a ``# file:`` TOML block written, Python executed in ``namespace``, bash
+    line by line."""
+    if kind == "toml":
+        (where / FILE.match(body).group(1)).write_text(body, encoding="utf-8")
+        return
+    if kind == "python":
+        exec(compile(body, "<doc block>", "exec"), namespace)  # noqa: S102
+        return
+    for line in body.replace("\\\n", " ").splitlines():
+        line = line.split("  #")[0].strip()
+        if not line or line.startswith("#"):
+            continue
+        done = subprocess.run(line, shell=True, cwd=where, env=env, capture_output=True,
+                              text=True)
+        assert done.returncode == 0, f"{line}\n{done.stderr}"
 
 
 def test_the_documentation_builds_strictly(tmp_path):
@@ -85,13 +96,6 @@ def test_the_tutorial_runs_as_written(tmp_path):
     assert (tmp_path / "transfer.png").is_file() and (tmp_path / "cr_chart.png").is_file()
 
 
-@pytest.mark.slow
-def test_the_readmes_tour_runs_as_written(tmp_path):
-    run_blocks([b for b in code_blocks(ROOT / "README.md") if "./tasks" not in b[1]],
-               tmp_path)
-    assert (tmp_path / "speed.png").is_file() and (tmp_path / "rp.bounds.nc").is_file()
-
-
 def test_the_readme_is_a_front_door():
     lines = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
     assert len(lines) <= 200
@@ -104,13 +108,28 @@ def test_the_readme_is_a_front_door():
             assert (ROOT / target).exists(), target
 
 
+#: the walk-throughs a reader follows, in the order the manual gives them: the README's
+#: tour, the tutorial, then the guides in the navigation's order
+WALK_THROUGHS = ["README.md", "docs/tutorial.md", "docs/guide/cli.md", "docs/guide/specs.md",
+                 "docs/guide/boundaries.md", "docs/guide/deciding.md",
+                 *(f"docs/guide/{m}.md" for m in ("crank_rocker", "linkage_forces", "six_link",
+                                                   "spring_balancer", "rotary_pendulum",
+                                                   "impact_machine"))]
+
+
 @pytest.mark.slow
-def test_the_decision_guide_runs_as_written(tmp_path):
-    """docs/guide/deciding.md end to end: the limits atlas, the chained forces, the front
-    and its chart, the picked design's own chained sweep and profile, the claim's query."""
-    blocks = code_blocks(ROOT / "docs" / "guide" / "deciding.md")
-    assert [k for k, _ in blocks].count("toml") == 2
-    run_blocks(blocks, tmp_path)
-    for name in ("limits.nc", "forces.nc", "front.nc", "front.png", "picked.nc",
-                 "picked.png"):
+def test_the_walk_throughs_run_in_sequence_in_one_folder(tmp_path):
+    """The README's tour, the tutorial and every guide's examples, run as written one after
+    another in one empty folder: no command needs --force and none writes over a file an
+    earlier one wrote (a name used twice would fail with "exists"), and the decision guide
+    runs end to end (the limits atlas, the chained forces, the front and its chart, the
+    picked design's chained sweep and profile, the claim's query)."""
+    blocks = [b for path in WALK_THROUGHS for b in code_blocks(ROOT / path)
+              if "./tasks" not in b[1]]
+    assert not any("--force" in body for kind, body in blocks if kind == "bash")
+    assert [k for k, _ in code_blocks(ROOT / "docs/guide/deciding.md")].count("toml") == 2
+    run_blocks(blocks, tmp_path, no_overwrite=True)
+    for name in ("speed.png", "rp.bounds.nc", "transfer.png", "cr_chart.png", "breaker.nc",
+                 "breaker_forces.nc", "breaker_front.nc", "breaker_front.png",
+                 "breaker_pick.nc", "breaker_pick.png"):
         assert (tmp_path / name).is_file(), name

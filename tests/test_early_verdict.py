@@ -1,8 +1,8 @@
 """Paying only for the flights a result needs (issue 40): a sequence that settles nowhere is
-called not periodic as soon as the budget's own verdict is certain (impact_map.
+called not periodic as soon as the budget's own verdict is certain (verdicts.
 settles_nowhere), checked against the long runs it replaces; a start is captured by a
-cycle another start found (impact_map.captured_by) only while it contracts onto it. (A
-start that stops on such a cycle, impact_map.known_attractor, is checked by the attractor
+cycle another start found (attractors.captured_by) only while it contracts onto it. (A
+start that stops on such a cycle, attractors.known_attractor, is checked by the attractor
 counts of tests/test_edges.py and tests/test_stability.py, against the blade twin's starts
 and the section map's own.)"""
 
@@ -11,8 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from kernels.impact.impact_map import (CAPTURE_DISTANCE, KNOWN, MAX_PERIOD, captured_by,
-                                       classify_period, not_periodic, settles_nowhere)
+from kernels.impact.attractors import CAPTURE_DISTANCE, KNOWN, captured_by
+from kernels.impact.verdicts import (MAX_PERIOD, classify_period, not_periodic,
+                                     settles_nowhere)
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_NOT_PERIODIC, Settings
 from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_EXACT
 from kernels.pendulum import systems, table
@@ -148,7 +149,7 @@ def test_the_early_verdict_leaves_slowly_converging_period_n_cycles_to_the_budge
 
 
 def known_rows(*cycles):
-    """Rows of known cycles (columns impact_map.KNOWN): (outcome, period, section state)."""
+    """Rows of known cycles (columns attractors.KNOWN): (outcome, period, section state)."""
     rows = np.zeros((len(cycles), KNOWN.key + 2))
     for j, (outcome, period, state) in enumerate(cycles):
         rows[j, KNOWN.outcome], rows[j, KNOWN.period] = outcome, period
@@ -166,7 +167,7 @@ def first_capture(history, known):
 
 
 def test_a_start_is_captured_only_while_it_contracts_onto_a_known_cycle():
-    """impact_map.captured_by, against sequences whose limits are known: a start that
+    """attractors.captured_by, against sequences whose limits are known: a start that
     spirals into a known fixed point (multipliers of modulus 0.5 to 0.85) is captured
     within CAPTURE_DISTANCE of it, and only then; into a known period-3 cycle, on the
     cycle's own phase; not by a cycle 5 to 50 CAPTURE_DISTANCE from its own limit (it

@@ -18,15 +18,16 @@ from kernels import INLINE_OPTIONS
 from kernels.impact import System
 from kernels.impact.events import ILLINOIS_ITERATIONS, make_illinois
 from kernels.impact.flight import make_flight, make_timed_flight
-from kernels.impact.impact_map import (aitken, aitken_jump, classify_period,
-                                       fixed_point_jump, impacts_past_jump, not_periodic,
-                                       secant_step)
+from kernels.impact.accelerators import (aitken, aitken_jump, fixed_point_jump,
+                                         impacts_past_jump, secant_step)
+from kernels.impact.verdicts import classify_period, not_periodic
 from kernels.impact.outcomes import SEQUENCE_MAX_STEPS, SEQUENCE_NOT_PERIODIC
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
                                      FLIGHT_NONFINITE, FLIGHT_UNDERFLOW)
+from kernels.cache import module_level
 from kernels.impact.runge_kutta import make_stepper
 from kernels.impact.tuples import relative_scales
-from tests.probes import fixed_steps_of, settings
+from tests.probes import cached, fixed_steps_of, settings
 
 OSCILLATOR, FREE_FALL = (1.0, 0.0), (0.0, 1.0)  # p = (c, g)
 UPPER, LOWER = 0, 1  # the events: x rising through data[0], x falling through data[1]
@@ -65,10 +66,10 @@ def line_monitor(t, y, f):
 LINE = System(line_rhs, relative_scales, line_values, line_rates, (1, -1), terminal,
               line_start, line_monitor)
 _line_flight, _ = make_flight(LINE)
-fixed_steps = fixed_steps_of(line_rhs, relative_scales)
+fixed_steps = cached(fixed_steps_of(line_rhs, relative_scales), "fixed_steps_line")
 
 
-@njit
+@njit(cache=True)
 def line_flight(t, y, p, data, s, refine):
     return _line_flight(t, y, p, data, s, refine)
 
@@ -103,7 +104,7 @@ _blowup_flight, _ = make_flight(System(blowup_rhs, relative_scales, blowup_value
                                        blowup_monitor))
 
 
-@njit
+@njit(cache=True)
 def blowup_flight(t, y, s):
     return _blowup_flight(t, y, 0.0, 0.0, s, False)
 
@@ -147,7 +148,7 @@ def test_dop853_tableau_is_scipys():
         assert list(zip(weighs[name], getattr(rk, name))) == nonzero(row, len(row))
 
 
-@njit
+@njit(cache=True)
 def _one_step(method, h):
     y = (1.0, 0.0)
     return _oscillator_step(method, y, line_rhs(y, OSCILLATOR), h, OSCILLATOR, 1e-30, 1.0)
@@ -189,7 +190,7 @@ def test_step_and_its_control_inlined_over_lanes_give_the_called_bits(method):
     inlined = make_stepper(rigid_rhs, relative_scales, inline=True)
     rule = make_step_size_rule(libm_power, inline=True)
 
-    def make_loop(step, control):
+    def make_loop(step, control, name):
         @njit(error_model="numpy")
         def loop(buf, code):
             for lane in range(8):
@@ -199,9 +200,10 @@ def test_step_and_its_control_inlined_over_lanes_give_the_called_bits(method):
                 buf[40 + lane], buf[48 + lane], buf[56 + lane] = y1[0], y1[1], f1[1]
                 buf[64 + lane] = control(code, buf[24 + lane], err, buf[72 + lane] != 0.0,
                                          buf[32 + lane])
-        return loop
+        return module_level(loop, name, globals(), dict(cache=True))
 
-    lanes, one_by_one = make_loop(inlined, rule), make_loop(called, next_step)
+    lanes = make_loop(inlined, rule, "lanes_inlined")
+    one_by_one = make_loop(called, next_step, "lanes_called")
 
     rng = np.random.default_rng(5)
     shrank = grew = 0
@@ -276,7 +278,7 @@ _cubic_flights = {direction: make_flight(System(
 _rising_flight, _falling_flight = _cubic_flights[1], _cubic_flights[-1]
 
 
-@njit
+@njit(cache=True)
 def cubic_flight(rising, p, s):
     if rising:
         return _rising_flight(0.0, (0.0, 0.0, 0.0), p, 0.0, s, False)
@@ -366,12 +368,12 @@ _line_timed = make_timed_flight(line_rhs, relative_scales)
 _blowup_timed = make_timed_flight(blowup_rhs, relative_scales)
 
 
-@njit
+@njit(cache=True)
 def line_timed(t0, y0, t1, p, s):
     return _line_timed(t0, y0, t1, p, s)
 
 
-@njit
+@njit(cache=True)
 def blowup_timed(t1, s):
     return _blowup_timed(0.0, (1.0,), t1, 0.0, s)
 
@@ -427,7 +429,7 @@ _root_linear = make_illinois(_linear)
 _root_step = make_illinois(_step)
 
 
-@njit
+@njit(cache=True)
 def roots(a, tol):
     return _root_linear(a, 0.0, 1.0, -a, 1.0 - a, tol), _root_step(a, 0.0, 1.0, -1.0, 1.0,
                                                                     tol)
@@ -627,14 +629,14 @@ def test_a_failed_fixed_point_jump_keeps_the_secant_jacobian():
     without a jump and keeps the last secant Jacobian, which impacts_past_jump counts the
     impacts from rest on (it was reset to zero, and a rotor-stop design whose later jump
     failed counted its transient as over at the first jump)."""
-    from kernels.impact.impact_map import Acceleration, make_accelerators
+    from kernels.impact.accelerators import Acceleration, make_accelerators
     from kernels.pendulum import systems
 
     contact = systems.CONTACTS["rotor", "rotor_stop", ()]
     inner, first = make_accelerators(contact)[1], contact.first
 
     @njit
-    def fails_to_jump(p, data, jac, history):  # inner functions have no Python wrapper
+    def jump(p, data, jac, history):  # inner functions have no Python wrapper
         t, y, data = first(p, data, 0)
         a = Acceleration(jumped_at=2, secant=False, converged=False, jac=jac,
                          x_secant=(0.0, 0.0), f_secant=(0.0, 0.0), t_orbit=t, y_orbit=y,
@@ -642,6 +644,7 @@ def test_a_failed_fixed_point_jump_keeps_the_secant_jacobian():
         after, t1, y1 = inner(a, history, 6, t, y, data, p)
         return after.jac, after.jumped_at, t1 == t and y1 == y
 
+    fails_to_jump = module_level(jump, "fails_to_jump", globals(), dict(cache=True))
     case = np.array([2.0, 4.0, 0.0, 1.2, 0.0, 0.0, 0.0, 100.0, 100.0, 1.0])
     jac = (-0.5, 0.1, 0.2, -0.7)
     history = np.ones((8, 2))  # four equal sections: no affine map through them

@@ -9,7 +9,10 @@ import numpy as np
 import pytest
 
 import sweep
-from kernels import machine as M
+from kernels import impact_machine as M
+from kernels.machine.cycle import RUNUP_REVOLUTIONS
+from kernels.machine.declaration import LAW_GENERALIZED, LAW_KINEMATIC
+from kernels.machine.revolution import REV_BLOW, REV_STALL
 from kernels.extrema import cell_midpoints
 from tests import machine_reference as ref
 from tests.machine_probes import (blow_of, data, node_of, parameters, reduced_at,
@@ -59,7 +62,7 @@ def random_design(rng, kind=None, coupler="general"):
         d.update(m2=0.0, J2=0.0)
     elif coupler == "lumped":  # a mass at B and one at C: centroid on BC, J2 = m2 p2 (l2 - p2)
         status, m, own = data(parameters(**d))
-        l2 = m[M.M_L2]
+        l2 = m.linkage.l2
         d.update(q2=0.0, J2=d["m2"] * d["s2"] * (1 - d["s2"]) * l2 * l2)
     return d
 
@@ -74,13 +77,13 @@ def test_M_O1_one_sided_u31_at_both_ends_of_the_cycle_are_the_closed_forms(kind)
     for _ in range(20):
         d = random_design(rng, kind)
         status, m, own = data(parameters(**d))
-        lam0, lam2, lam3 = m[M.M_L0] / m[M.M_L1], m[M.M_L2] / m[M.M_L1], m[M.M_L3] / m[M.M_L1]
+        lam0, lam2, lam3 = m.linkage.l0 / m.linkage.l1, m.linkage.l2 / m.linkage.l1, m.linkage.l3 / m.linkage.l1
         gamma = math.sqrt(lam0 * lam2 / lam3)
-        start = m[M.M_START]
+        start = m.linkage.start
         u31 = reduced_at(parameters(**d), np.array([start, start + 2 * math.pi]))[:, 3]
         den = (1 + lam0) if kind == "c" else (1 - lam0)
         kappa = -1.0 if kind == "b" else 1.0
-        s = kappa * m[M.M_SIGMA] * gamma
+        s = kappa * m.linkage.sigma * gamma
         assert u31[0] == pytest.approx((1 + s) / den, rel=1e-13)  # after the blow
         assert u31[1] == pytest.approx((1 - s) / den, rel=1e-13)  # before it
 
@@ -90,7 +93,7 @@ def test_M_O2_J_prime_is_the_derivative_of_J():
     for _ in range(15):
         d = random_design(rng)
         pr = parameters(**d)
-        start = data(pr)[1][M.M_START]
+        start = data(pr)[1].linkage.start
         phis = start + rng.uniform(0.05, 2 * math.pi - 0.05, 6)
         h = 1e-5
         at = reduced_at(pr, phis)
@@ -129,7 +132,7 @@ def test_M_O5_the_kinematic_law_keeps_the_crank_speed_at_every_synthesised_desig
     rng = np.random.default_rng(15)
     for _ in range(30):
         d = random_design(rng)
-        w_plus = blow_of(parameters(**d), 20.0, d["R"], M.LAW_KINEMATIC)[0][0]
+        w_plus = blow_of(parameters(**d), 20.0, d["R"], LAW_KINEMATIC)[0][0]
         assert w_plus == pytest.approx(20.0, rel=1e-13)
 
 
@@ -145,7 +148,7 @@ def test_M_O6_law_G_at_Rk_equal_minus_R_without_coupler_coupling_keeps_the_speed
         d = random_design(rng, kind, coupler)
         pr = parameters(**d)
         (w_plus, impulse, loss, tool, capture), difference = blow_of(pr, 25.0, d["R"],
-                                                                     M.LAW_GENERALIZED)
+                                                                     LAW_GENERALIZED)
         before = 0.5 * node_of(pr)[0] * 25.0 ** 2
         assert w_plus == pytest.approx(25.0, rel=1e-13)
         assert abs(capture) <= 1e-13 * before
@@ -160,7 +163,7 @@ def test_a_general_coupler_at_Rk_equal_minus_R_does_kick_the_crank():
     for _ in range(20):
         d = random_design(rng)
         (w_plus, _, loss, _, capture), _ = blow_of(parameters(**d), 25.0, d["R"],
-                                                   M.LAW_GENERALIZED)
+                                                   LAW_GENERALIZED)
         kicks.append(abs(w_plus - 25.0) / 25.0)
         assert capture > 1e-12 * loss
     assert max(kicks) > 1e-3
@@ -176,7 +179,7 @@ def test_M_O7_law_G_never_gains_energy_and_its_capture_loss_is_the_carnot_loss()
         d = random_design(rng)
         r = float(rng.uniform(0.0, 1.0))
         (w_plus, impulse, loss, tool, capture), difference = blow_of(
-            parameters(**d), 30.0, r, M.LAW_GENERALIZED)
+            parameters(**d), 30.0, r, LAW_GENERALIZED)
         before = 0.5 * node_of(parameters(**d))[0] * 30.0 ** 2
         assert difference >= -1e-13 * before and tool >= -1e-13 * before
         assert capture >= -1e-13 * before
@@ -195,14 +198,14 @@ def test_M_O8_the_kinematic_law_gains_energy_exactly_where_its_condition_says():
         jm, jp, jpm, mr, u31m, u31p = node_of(pr)[:6]
         status, m, own = data(pr)
         rk = u31p / u31m
-        margin = m[M.M_JA] * (r * r / (rk * rk) - 1) - m[M.M_JD3] * u31m ** 2 * (1 - r * r)
-        w_plus, _, loss, _, _ = blow_of(pr, 30.0, r, M.LAW_KINEMATIC)[0]
-        if abs(margin) < 1e-9 * m[M.M_JA]:
+        margin = m.ja * (r * r / (rk * rk) - 1) - m.masses.jd3 * u31m ** 2 * (1 - r * r)
+        w_plus, _, loss, _, _ = blow_of(pr, 30.0, r, LAW_KINEMATIC)[0]
+        if abs(margin) < 1e-9 * m.ja:
             continue
         compared += 1
         gains += loss < 0
         agree += (margin > 0) == (loss < 0)
-        assert blow_of(pr, 30.0, r, M.LAW_GENERALIZED)[0][2] >= 0.0
+        assert blow_of(pr, 30.0, r, LAW_GENERALIZED)[0][2] >= 0.0
     assert agree == compared >= 290 and gains > 10
 
 
@@ -214,8 +217,8 @@ def test_M_O9_law_G_without_crank_inertia_is_the_kinematic_law():
         d.update(m1=0.0, J1=0.0, flywheel_inertia=0.0)
         pr = parameters(**d)
         r = float(rng.uniform(0.0, 1.0))
-        g = blow_of(pr, 30.0, r, M.LAW_GENERALIZED)[0]
-        s = blow_of(pr, 30.0, r, M.LAW_KINEMATIC)[0]
+        g = blow_of(pr, 30.0, r, LAW_GENERALIZED)[0]
+        s = blow_of(pr, 30.0, r, LAW_KINEMATIC)[0]
         jm, jp = node_of(pr)[:2]
         assert g[0] == pytest.approx(s[0], rel=1e-13)
         assert 0.5 * jp * g[0] ** 2 == pytest.approx(r * r * 0.5 * jm * 30.0 ** 2, rel=1e-13,
@@ -248,7 +251,7 @@ def test_M_O10_and_M_O11_the_steady_cycle_balances_its_energy_and_is_a_fixed_poi
         assert abs(out["energy_balance_residual"]) <= 1e-9
         w = out["crank_speed_after_blow"]
         end, w_minus, w_next, period, angle = section_map(parameters(**d), w, 1e-10)
-        assert end == M.REV_BLOW and abs(w_next - w) <= 1e-11 * w * 10
+        assert end == REV_BLOW and abs(w_next - w) <= 1e-11 * w * 10
     assert checked >= 8
 
 
@@ -291,7 +294,7 @@ def test_M_O15_the_shaft_torque_is_the_linkages_balancing_moment_at_the_actual_m
     cols[decl.parameter_index.epsilon1] = prof["crank_acceleration"]
     res = np.empty(K.N_RESULT)
     for j in range(prof_n):
-        K.joint_forces(angles[j], cols[:, j].copy(), m[M.M_SIGMA], res, 1e-9)
+        K.joint_forces(angles[j], cols[:, j].copy(), m.linkage.sigma, res, 1e-9)
         expected = res[K.R_MB] - own * prof["crank_acceleration"][j]
         assert prof["shaft_torque"][j] == pytest.approx(expected, rel=1e-9, abs=1e-9 * 100)
 
@@ -330,7 +333,7 @@ def test_MH2_a_stall_inside_the_cycle_is_located():
     0.0126."""
     pr = parameters(motor_law="constant", stall_torque=8.0, flywheel_inertia=0.05)
     end, w_minus, w_next, period, angle = section_map(pr, 0.5, 1e-10)
-    assert end == M.REV_STALL and angle == pytest.approx(0.0126, abs=1e-4)
+    assert end == REV_STALL and angle == pytest.approx(0.0126, abs=1e-4)
 
 
 def test_MH3_only_the_rocker_has_inertia():
@@ -388,7 +391,7 @@ def test_MH9_a_heavy_flywheel_converges_in_a_few_revolutions():
     running, status, _ = outputs(flywheel_inertia=2000.0)
     assert status == "ok" and running["revolutions"] <= 8
     rest, status, _ = outputs({"start": "rest"}, flywheel_inertia=2000.0)
-    assert status == "ok" and rest["revolutions"] <= M.RUNUP_REVOLUTIONS + 12
+    assert status == "ok" and rest["revolutions"] <= RUNUP_REVOLUTIONS + 12
     assert rest["mean_crank_speed"] == pytest.approx(running["mean_crank_speed"], rel=1e-9)
 
 
@@ -398,7 +401,7 @@ def test_MH10_nothing_is_evaluated_as_0_over_0_at_the_node():
     for kind in ("a", "b", "c"):
         d = random_design(np.random.default_rng(22), kind)
         pr = parameters(**d)
-        start = data(pr)[1][M.M_START]
+        start = data(pr)[1].linkage.start
         assert np.all(np.isfinite(reduced_at(pr, np.array([start, start + 2 * math.pi]))))
 
 

@@ -8,6 +8,7 @@ import pytest
 from scipy.special import ellipk as scipy_ellipk
 
 from kernels import rotary_pendulum as kr
+from kernels.pendulum import free_flight as ff
 from kernels.pendulum import dispatch, models as pm
 from kernels.impact.outcomes import FLIGHT_EVENT
 from sweep import spec
@@ -29,8 +30,8 @@ DOPRI5 = probes.METHODS["dopri5"]
 
 def closed(k, v=None, xi=XI):
     v = 1 + k if v is None else v
-    amp = pm.paper_amplitude(v, k, xi)
-    return amp, pm.paper_half_period(v, k, xi, amp), pm.paper_peak_acceleration(v, k, xi, amp)
+    amp = ff.paper_amplitude(v, k, xi)
+    return amp, ff.paper_half_period(v, k, xi, amp), ff.paper_peak_acceleration(v, k, xi, amp)
 
 
 def launch(model, v, p, **settings):
@@ -77,15 +78,15 @@ def test_P_O1_first_integral_is_conserved_along_a_dopri5_orbit():
     for tau in (0.3, 0.9, 1.6, 2.4):
         psi, dpsi = probes.fixed_steps("paper")(DOPRI5, (0.0, -v), (k, XI), tau / 400, 400)
         assert invariant(psi, dpsi) == pytest.approx(start, rel=1e-10)
-        assert dpsi * dpsi == pytest.approx(pm.paper_u(psi, v, k, XI), rel=1e-9, abs=1e-12)
+        assert dpsi * dpsi == pytest.approx(ff.paper_u(psi, v, k, XI), rel=1e-9, abs=1e-12)
 
 
 def test_P_O6_affine_impact_map_fixed_point_and_contraction():
     k, r = 2.5, 0.2
-    v_star = pm.steady_state_speed(k, r)
+    v_star = ff.steady_state_speed(k, r)
     assert v_star == pytest.approx(5.25, rel=1e-15)
     assert 1 + k + v_star == pytest.approx(2 * (1 + k) / (1 - r), rel=1e-15)  # V*/(omega1 l2)
-    count, escaped = pm.impacts_to_converge(k, r, pm.paper_critical_speed(k, XI), 1e-11)
+    count, escaped = ff.impacts_to_converge(k, r, ff.paper_critical_speed(k, XI), 1e-11)
     assert not escaped and count == math.ceil(math.log(1e-11) / math.log(r))  # ratio R
     assert count == 16 or count == 17  # docs/models.md §5.4: 17 impacts to 1e-11
 
@@ -93,7 +94,7 @@ def test_P_O6_affine_impact_map_fixed_point_and_contraction():
 @pytest.mark.parametrize("k, r_crit", [(1.0, 0.061), (1.5, 0.146), (2.0, 0.221), (2.5, 0.288)])
 @pytest.mark.parametrize("integrator", ["closed_form", "dopri5"])
 def test_P_O7_escape_threshold_classifies_exactly(k, r_crit, integrator):
-    v_crit = pm.paper_critical_speed(k, XI)
+    v_crit = ff.paper_critical_speed(k, XI)
     exact = (v_crit - (1 + k)) / (v_crit + (1 + k))
     assert exact == pytest.approx(r_crit, abs=6e-4)
     method = dict(integrator=integrator, rtol=1e-10, atol=1e-12, max_impacts=100000)
@@ -105,15 +106,15 @@ def test_P_O7_escape_threshold_classifies_exactly(k, r_crit, integrator):
 
 def test_P_O8_rigid_pendulum_elliptic_period_and_the_separatrix():
     for m in (0.1, 0.5, 0.9, 0.999):
-        assert pm.ellipk(m) == pytest.approx(scipy_ellipk(m), rel=4e-16)
+        assert ff.ellipk(m) == pytest.approx(scipy_ellipk(m), rel=4e-16)
     # kappa k = 2: launched with 1 + k = 2 from k = 1, m = 0.5
-    amp, tau1, acc = pm.rigid_flight(2.0, 2.0)
+    amp, tau1, acc = ff.rigid_flight(2.0, 2.0)
     fl = launch("rigid", 2.0, (1.0, 2.0), rtol=1e-12, atol=1e-14)
     assert abs(fl.t - tau1) <= 1e-9 and abs(fl.amplitude - amp) <= 1e-9
     assert amp == pytest.approx(2 * math.asin(math.sqrt(0.5)), rel=1e-15)
     # H1: on the separatrix (point mass, k = 1, R = 0: v^2 = 4 kappa k) the closed form
     # decides before any integration
-    assert math.isnan(pm.rigid_flight(2.0, 1.0)[0])
+    assert math.isnan(ff.rigid_flight(2.0, 1.0)[0])
     out, status = dimensionless(dict(integrator="dopri5"), model="rigid", k=1.0, kappa=1.0)
     assert status == "separatrix" and out["n_steps"] == 0  # no step taken
 
@@ -134,7 +135,7 @@ def test_the_rigid_pendulums_closed_form_is_as_exact_as_m_up_to_the_separatrix()
     for j in range(300):
         omega2 = 10 ** rng.uniform(-1.0, 1.5)
         v = (1.0 - 10 ** rng.uniform(-13.0, -0.01 if j % 2 else -2.0)) * 2.0 * math.sqrt(omega2)
-        amplitude, tau1, peak = pm.rigid_flight(v, omega2)
+        amplitude, tau1, peak = ff.rigid_flight(v, omega2)
         m = mp.mpf(v) ** 2 / (4 * mp.mpf(omega2))
 
         def exact_tau(mm):
@@ -191,12 +192,12 @@ def test_physical_pendulum_never_returns_after_a_plastic_impact():
 
 def test_H2_near_separatrix_slowing():
     k = 2.5
-    v_crit = pm.paper_critical_speed(k, XI)
+    v_crit = ff.paper_critical_speed(k, XI)
     expected = {1e-2: 4.31, 1e-4: 7.37, 1e-6: 10.44}
     for delta, tau in expected.items():
         v = v_crit * (1 - delta)
-        amp = pm.paper_amplitude(v, k, XI)
-        assert pm.paper_half_period(v, k, XI, amp) == pytest.approx(tau, abs=0.01)
+        amp = ff.paper_amplitude(v, k, XI)
+        assert ff.paper_half_period(v, k, XI, amp) == pytest.approx(tau, abs=0.01)
 
 
 @pytest.mark.parametrize("model", ["paper", "rigid"])
@@ -207,7 +208,7 @@ def test_integrators_agree_with_the_closed_form_at_random_points(model):
     for _ in range(15):
         k = rng.uniform(1.0, 3.0)
         kappa = (1 + k) ** 2 / (4 * k) * rng.uniform(1.1, 1.6)
-        crit = (pm.paper_critical_speed(k, XI) if model == "paper"
+        crit = (ff.paper_critical_speed(k, XI) if model == "paper"
                 else 2 * math.sqrt(kappa * k))
         r = rng.uniform(0, 0.9) * (crit - 1 - k) / (crit + 1 + k)
         design = dict(model=model, k=k, kappa=kappa, R=r)
@@ -411,9 +412,9 @@ def test_the_closed_form_peak_acceleration_is_exact_to_round_off():
             k = 1.0 + rng.choice([-1.0, 1.0]) * 10 ** rng.uniform(-6.0, -1.0)
         elif j % 4 == 2:
             xi = 10 ** rng.uniform(-2.0, -1.0)
-        v = (1.0 - 10 ** rng.uniform(-13.0, -0.01)) * pm.paper_critical_speed(k, xi)
-        amplitude = pm.paper_amplitude(v, k, xi)
-        assert pm.paper_peak_acceleration(v, k, xi, amplitude) == pytest.approx(
+        v = (1.0 - 10 ** rng.uniform(-13.0, -0.01)) * ff.paper_critical_speed(k, xi)
+        amplitude = ff.paper_amplitude(v, k, xi)
+        assert ff.paper_peak_acceleration(v, k, xi, amplitude) == pytest.approx(
             exact(v, k, xi, amplitude), rel=2e-12), (k, xi, v)
 
 
@@ -435,16 +436,16 @@ def test_the_peak_accelerations_scan_finds_the_roots_of_the_exact_slope():
         k, xi = rng.uniform(0.05, 5.0), 10 ** rng.uniform(-2.0, 1.3)
         if j % 4 == 0:
             k = 1.0 + rng.choice([-1.0, 1.0]) * 10 ** rng.uniform(-6.0, -1.0)
-        v = (1.0 - 10 ** rng.uniform(-13.0, -0.01)) * pm.paper_critical_speed(k, xi)
-        amplitude = pm.paper_amplitude(v, k, xi)
-        best = pm._paper_flight_acceleration(amplitude, (v, k, xi))
+        v = (1.0 - 10 ** rng.uniform(-13.0, -0.01)) * ff.paper_critical_speed(k, xi)
+        amplitude = ff.paper_amplitude(v, k, xi)
+        best = ff._paper_flight_acceleration(amplitude, (v, k, xi))
         points = [amplitude * i / 32 for i in range(33)]
         signs = [1.0] + [slope(p, k, xi) for p in points[1:]]
         for lo, hi, before, after in zip(points, points[1:], signs, signs[1:]):
             if before > 0.0 and not after > 0.0:
                 psi = brentq(slope, lo, hi, args=(k, xi), xtol=1e-16) if after < 0.0 else hi
-                best = max(best, pm._paper_flight_acceleration(psi, (v, k, xi)))
-        assert pm.paper_peak_acceleration(v, k, xi, amplitude) == pytest.approx(
+                best = max(best, ff._paper_flight_acceleration(psi, (v, k, xi)))
+        assert ff.paper_peak_acceleration(v, k, xi, amplitude) == pytest.approx(
             best, rel=1e-14), (k, xi, v)
 
 
@@ -491,10 +492,10 @@ def test_the_closed_form_flight_time_is_exact_to_round_off_up_to_the_separatrix(
         elif j % 4 == 2:
             xi = 10 ** rng.uniform(-2.0, -1.0)
         gap = 10 ** rng.uniform(-13.0, -9.0 if j % 3 == 0 else -0.05)
-        v = (1.0 - gap) * pm.paper_critical_speed(k, xi)
-        amplitude = pm.paper_amplitude(v, k, xi)
+        v = (1.0 - gap) * ff.paper_critical_speed(k, xi)
+        amplitude = ff.paper_amplitude(v, k, xi)
         tau = exact(amplitude, k, xi)
-        assert pm.paper_half_period(v, k, xi, amplitude) == pytest.approx(
+        assert ff.paper_half_period(v, k, xi, amplitude) == pytest.approx(
             tau, rel=2e-14), (k, xi, v)
         checked += 1
     assert checked == 120
@@ -516,7 +517,7 @@ def test_the_first_integrals_rises_are_exact_to_a_few_ulp():
                          rng.choice([-1.0, 1.0], 200) * 10 ** rng.uniform(-12.0, -0.1, 200)])
     for z in zs:
         exact = mp.mpf(z) - mp.log1p(mp.mpf(z))
-        assert abs(pm.log1p_excess(z) - exact) <= 4 * eps * exact, z
+        assert abs(ff.log1p_excess(z) - exact) <= 4 * eps * exact, z
 
     def g(x, xi):
         return mp.log1p(xi * x) / xi ** 2 - x / xi
@@ -524,7 +525,7 @@ def test_the_first_integrals_rises_are_exact_to_a_few_ulp():
         k, xi = rng.uniform(0.05, 5.0), 10 ** rng.uniform(-2.0, 1.3)
         full = g((mp.mpf(k) - 1) ** 2, mp.mpf(xi)) - g((mp.mpf(k) + 1) ** 2, mp.mpf(xi))
         exact = mp.sqrt(xi * mp.expm1(full))
-        assert abs(pm.paper_critical_speed(k, xi) / exact - 1) <= 4 * eps * (1 + full), (k, xi)
+        assert abs(ff.paper_critical_speed(k, xi) / exact - 1) <= 4 * eps * (1 + full), (k, xi)
 
 
 def test_the_closed_form_amplitude_is_as_exact_as_the_rise_it_is_solved_from():
@@ -555,10 +556,10 @@ def test_the_closed_form_amplitude_is_as_exact_as_the_rise_it_is_solved_from():
         if j % 10 == 0:
             k = 1.0 + rng.uniform(-1e-3, 1e-3)
         gap = 10 ** rng.uniform(-13.0, -9.0 if j % 3 == 0 else -0.05)
-        v = (1.0 - gap) * pm.paper_critical_speed(k, xi)
+        v = (1.0 - gap) * ff.paper_critical_speed(k, xi)
         kk, xx = mp.mpf(k), mp.mpf(xi)
         rise = mp.log1p(mp.mpf(v) ** 2 / xx)
         full = g((kk - 1) ** 2, xx) - g((kk + 1) ** 2, xx)
         a = exact(rise, kk, xx)
         unit = eps * a + abs(exact(rise - eps * full, kk, xx) - a)
-        assert abs(pm.paper_amplitude(v, k, xi) - a) <= 4 * unit, (k, xi, v)
+        assert abs(ff.paper_amplitude(v, k, xi) - a) <= 4 * unit, (k, xi, v)

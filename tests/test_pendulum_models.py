@@ -13,14 +13,15 @@ from scipy.optimize import brentq
 from kernels import rotary_pendulum as kr
 from kernels.impact.impact_map import SPEED_EPS
 from kernels.impact.runge_kutta import METHOD_DOPRI5, METHOD_EXACT
+from kernels.pendulum import free_flight as ff
 from kernels.pendulum import distinct
 from kernels.pendulum.accuracy import exact_settings
 from kernels.pendulum.dispatch import USED_CLOSED
-from kernels.pendulum.models import rigid_exact
+from kernels.pendulum.free_flight import rigid_exact
 from kernels.pendulum.cases import CASE_COLUMNS, N_ROW
 from kernels.pendulum.systems import entry_point, settings_for
 from kernels.pendulum.table import BY_CODES
-from kernels.pendulum.tools import SECTION_MIN_FLIGHT
+from kernels.pendulum.blade import SECTION_MIN_FLIGHT
 from tests.conftest import kernel_point, kernel_points
 from tests.pendulum_twins import (beta as twin_beta, h_ratio, paper_acceleration,
                                   rigid_acceleration, rotor_forces, rotor_mass)
@@ -501,7 +502,7 @@ def test_lab_blade_steady_chatter_regime_matches_scipy(k, kappa, r, window, peri
     assert interval == pytest.approx(2 * math.pi * turns / period, rel=1e-9)  # phase-locked
 
 
-@njit
+@njit(cache=True)
 def _exact_walk(psi, dpsi, k, kappa, h, n):
     y = (psi, dpsi)
     for _ in range(n):
@@ -511,7 +512,7 @@ def _exact_walk(psi, dpsi, k, kappa, h, n):
 
 @pytest.mark.slow
 def test_the_rigid_pendulums_exact_step_against_scipy_and_mpmath():
-    """The closed-form flight's step (Jacobi's addition theorem, models.rigid_exact),
+    """The closed-form flight's step (Jacobi's addition theorem, ff.rigid_exact),
     walked over random spans at random designs and energies: libration, rotation over the
     top and near the separatrix. Against DOP853 at 1e-13 within 1e-10 where the energy is
     1e-3 or more from the separatrix; near it (m within 1e-8..1e-12 of 1), where DOP853
@@ -553,7 +554,7 @@ def test_the_rigid_pendulums_exact_step_against_scipy_and_mpmath():
 
 def test_closed_form_flights_step_wide_only_where_no_event_can_fire():
     """A transient's closed-form flight on the blade steps past the event search's length
-    where no event can fire within the step (tools.lab_window's clear_time, from the
+    where no event can fire within the step (blade.lab_window's clear_time, from the
     energy's bound on psi'). From 300 random states of random designs (libration and
     rotation over the top, near a face and far from it), each flight flown so (refine
     off) and by the search's steps throughout (refine on) ends the same way, at the same event at times
@@ -905,7 +906,7 @@ def test_rotor_on_the_blade_chatters_like_the_rigid_model_in_the_limit():
                                                 ("rigid", True)])
 def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(model,
                                                                               closed_form):
-    """The coast of a driven pendulum's free flight past the lab blade (tools._swing_coast)
+    """The coast of a driven pendulum's free flight past the lab blade (blade._swing_coast)
     skips half swings in closed form. At 60 random designs and swings (k, xi or kappa,
     the blade's reach, the swing's amplitude above it, where the faces stand), from
     anywhere in the half swing after a passage of psi = 0: SciPy's DOP853 (rtol 1e-12)
@@ -920,7 +921,7 @@ def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(mo
     from numba import njit
 
     from kernels.pendulum import models as pm
-    from kernels.pendulum.tools import _swing_coast
+    from kernels.pendulum.blade import _swing_coast
 
     m = pm.PAPER if model == "paper" else pm.RIGID
     coast = _swing_coast(m)
@@ -950,7 +951,7 @@ def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(mo
             return [z[1], -k * c * math.sin(z[0])]
         # launch speed at psi = 0 for this amplitude: the turning point's rise
         if model == "paper":
-            v = math.sqrt(c * math.expm1(pm.rise_from_launch(
+            v = math.sqrt(c * math.expm1(ff.rise_from_launch(
                 4.0 * k * math.sin(0.5 * amp) ** 2, (1.0 + k) ** 2, c)))
         else:
             v = 2.0 * math.sqrt(k * c) * math.sin(0.5 * amp)
@@ -1001,6 +1002,7 @@ def test_a_free_swing_coasts_past_the_blade_only_where_scipy_finds_no_contact(mo
     assert coasted > 15 and passed > 50 and 0 < odd < coasted
 
 
+@pytest.mark.slow  # DOP853's entry points, used by no other test of the fast loop
 def test_dop853_matches_the_closed_form_on_the_stop_and_dopri5_on_the_blade():
     """Issue 40, the higher-order pair forced: at random designs, DOP853 at rtol 1e-12
     (atol = rtol) on the rotor stop within 5e-12 of the closed form (paper and rigid

@@ -17,6 +17,7 @@ from numba import njit
 
 from kernels.impact.outcomes import SEQUENCE_CYCLE, Settings
 from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5, METHOD_EXACT, METHOD_RK4
+from kernels.cache import module_level
 from kernels.pendulum import dispatch, models, systems, table, tools
 from kernels.pendulum.accuracy import exact_settings
 from kernels.pendulum.cases import CASE_COLUMNS, N_ROW, ROW, C
@@ -29,7 +30,7 @@ TOY = table.PendulumSystem("paper", "mirrored_stop", closed_form=False, exact_fl
                            slide=False, tangent=False, affine=True)
 
 
-@njit
+@njit(cache=True)
 def mirrored_stop_data(case):
     return 0.0, case[C.k]  # the stop at psi = 0, the rotor stop's data
 
@@ -41,11 +42,7 @@ def toy_entry(model: str):
                                 systems.PARAMETERS[model], mirrored_stop_data,
                                 returning=True)
 
-    @njit
-    def entry(cases, settings, rows, first_rows, log):
-        block(cases, settings, rows, first_rows, log)
-
-    return entry
+    return module_level(block, f"toy_mirrored_stop_{model}", globals(), dict(cache=True))
 
 
 def cases_of(model, k, xi, kappa, r, tool="rotor_stop"):

@@ -45,7 +45,7 @@ def dense_max(f, pieces, n=4001, keep=6, vectorized=False):
 def forces_at(phi, pr):
     res = np.empty(kt.N_RESULT)
     gx, gy = -pr[kt.P.g] * math.sin(pr[kt.P.tilt]), -pr[kt.P.g] * math.cos(pr[kt.P.tilt])
-    ok = kt._joint_forces(phi, pr, pr[kt.P.sigma], res, 1e-9, gx, gy, 0.0, 0.0)
+    ok = kt.dyad_reactions(phi, pr, pr[kt.P.sigma], res, 1e-9, gx, gy, 0.0, 0.0)
     return res if ok else None
 
 

@@ -253,18 +253,18 @@ def test_a_first_runs_compile_is_said_with_its_time_and_a_warm_start_says_nothin
 
     from sweep import engine, runner
 
-    monkeypatch.setattr(engine, "warm_up", lambda sweep: time.sleep(1.2))
+    monkeypatch.setattr(engine, "warm_up", lambda sweep, columns=None: time.sleep(1.2))
     runner.compile_first(None, announce=True)
     err = capsys.readouterr().err
     assert "compiling kernels (first run only" in err and re.search(r"compiled in \d+ s", err)
     runner.compile_first(None, announce=False)
     assert capsys.readouterr().err == ""
-    monkeypatch.setattr(engine, "warm_up", lambda sweep: None)
+    monkeypatch.setattr(engine, "warm_up", lambda sweep, columns=None: None)
     runner.compile_first(None, announce=True)
     assert capsys.readouterr().err == ""
 
     # on a new terminal (0 x 0) the clock ticks
-    monkeypatch.setattr(engine, "warm_up", lambda sweep: time.sleep(2.6))
+    monkeypatch.setattr(engine, "warm_up", lambda sweep, columns=None: time.sleep(2.6))
     shown = on_new_terminal(monkeypatch, lambda: runner.compile_first(None, announce=True))
     assert "compiling kernels (first run only" in shown and "00:01" in shown, shown
     assert re.search(r"compiled in \d+ s", shown)

@@ -513,6 +513,7 @@ def test_a_chattering_cycle_has_its_slowest_impact_near_zero():
     assert stop_status == ["ok"] * 3 and (stop["impact_speed_min_ratio"] == 1.0).all()
 
 
+@pytest.mark.slow  # DOP853 with the tangent: entry points no fast test compiles
 @pytest.mark.parametrize("design", [
     dict(model="rotor", tool="rotor_stop", k=1.0, kappa=1.2, R=0.05),
     dict(model="rotor", tool="lab_window", k=1.0, kappa=1.2, R=0.01, tool_window=0.3),

@@ -2,10 +2,13 @@
 module (plus one registry line, which the test that uses it adds)."""
 
 import math
+from collections import namedtuple
 
 import numpy as np
 from numba import njit
 
+from kernels.block import each_design
+from kernels.cache import module_level
 from kernels.declaration import POSITIVE, Mechanism, Output, Quantity
 
 DECLARATION = Mechanism(
@@ -32,17 +35,22 @@ O = DECLARATION.output_index
 S = DECLARATION.status_codes
 
 
-@njit(cache=False)
-def _block(params, scale, out, status):
-    for i in range(params.shape[1]):
-        speed = abs(params[P.omega1, i]) * params[P.radius, i] * scale
-        out[O.tip_speed, i] = speed
-        out[O.side_used, i] = params[P.side, i]
-        status[i] = S.ok if math.isfinite(speed) else S.nonfinite
+@njit
+def design(i, pr, settings, out, prof):
+    speed = abs(pr[P.omega1]) * pr[P.radius] * settings.scale
+    out[O.tip_speed] = speed
+    out[O.side_used] = pr[P.side]
+    return S.ok if math.isfinite(speed) else S.nonfinite
+
+
+Settings = namedtuple("Settings", ["scale"])
+toy_block = module_level(each_design(design), "toy_block", globals(), dict(cache=False))
 
 
 def run(params, method):
-    out = np.empty((len(O), params.shape[1]))
-    status = np.empty(params.shape[1], dtype=np.int8)
-    _block(params, method.scale, out, status)
-    return out, status, np.empty((0, params.shape[1], 0))
+    n = params.shape[1]
+    out = np.empty((len(O), n))
+    status = np.empty(n, dtype=np.int8)
+    toy_block(np.ascontiguousarray(params), Settings(scale=float(method.scale)), out, status,
+              np.empty((0, n, 0)))
+    return out, status, np.empty((0, n, 0))

@@ -105,14 +105,14 @@ def make_event_roots(values, rates, step):
 
     @njit(**INLINE_OPTIONS)
     def on_interpolant(s, data):
-        """g of event data[0] on the step's interpolant at s; data = (event, step,
-        context)."""
-        e, (t, h, y0, f0, y1, f1), context = data
-        return values(t + s, hermite(s, h, y0, f0, y1, f1), context[0])[e]
+        """g of event e on the step's interpolant at s; data = (e, step, context)."""
+        e, (t, h, y0, f0, y1, f1), (system, p, method, slack) = data
+        return values(t + s, hermite(s, h, y0, f0, y1, f1), system)[e]
 
     @njit(**INLINE_OPTIONS)
     def on_partial_step(s, data):
-        """g of event data[0] on the exact partial step of length s from the step's start."""
+        """g of event e on the exact partial step of length s from the step's start; data =
+        (e, step, context)."""
         e, (t, h, y0, f0, y1, f1), (system, p, method, slack) = data
         ys, fs, _ = step(method, y0, f0, s, p, 1.0, 1.0)
         return values(t + s, ys, system)[e]
@@ -152,7 +152,7 @@ def make_locator(values, rates, directions, step):
         """The first crossing of event e in (0, h], or -1; g and r: the event's values and
         rates at the step's two ends."""
         t, h, y0, f0, y1, f1 = st
-        system, slack = context[0], context[3]
+        system, p, method, slack = context
         g0, g1 = g
         r0, r1 = r
         direction = directions[e]
@@ -199,7 +199,8 @@ def make_locator(values, rates, directions, step):
         g is on the near side (strictly) at the interpolant's turn away from the level in
         (0, s) and on the far side at s, each on an exact partial step, the crossing between
         them, on exact partial steps; else -1."""
-        h, system = st[1], context[0]
+        t, h, y0, f0, y1, f1 = st
+        system, p, method, slack = context
         direction = directions[e]
         up = direction > 0
         data = (e, st, context)
@@ -219,7 +220,7 @@ def make_locator(values, rates, directions, step):
         and end = (values, rates) of the events at the step's two ends (the flight passes
         a step's end on as the next step's start)."""
         t, h, y0, f0, y1, f1 = st
-        system = context[0]
+        system, p, method, slack = context
         v0, r0 = start
         v1, r1 = values(t + h, y1, system), rates(t + h, y1, f1, system)
         best_e, best_s = -1, -1.0

@@ -153,7 +153,8 @@ def make_flight(system):
                 start = events_at(t, y, f, data)
             else:
                 start = end
-            h, err_prev = next_step(y, start[0], data, p, settings, refine, h, err,
+            values_now, rates_now = start
+            h, err_prev = next_step(y, values_now, data, p, settings, refine, h, err,
                                     after_reject, err_prev)
             after_reject = bool(False)
         return Flight(FLIGHT_MAX_STEPS, -1, t, y, f, data, amplitude, peak,
@@ -345,7 +346,8 @@ def make_peak(monitor, step, high_order=True):
         if high_order:
             if method == METHOD_DOP853 and inside >= PEAK_EXACT_FRACTION * best_value:
                 inside, lo, hi = step_peak(t, h, y, f, y1, f1, upto, p, method, bool(True))
-        if best[4] == 0.0:  # still the start (an impact): a maximum just after it
+        y_best, f_best, y1_best, f1_best, h_best, t_best, lo_best, hi_best = best
+        if h_best == 0.0:  # still the start (an impact): a maximum just after it
             best = (y, f, y1, f1, h, t, 0.0, upto / (PEAK_SAMPLES + 1))
         if inside > best_value:
             best, best_value = (y, f, y1, f1, h, t, lo, hi), inside

@@ -53,7 +53,12 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS
+from kernels.impact.accelerators import (Acceleration, aitken_jump, impacts_past_jump,
+                                         make_accelerators)
+from kernels.impact.attractors import KNOWN, captured_by, known_attractor
+from kernels.impact.verdicts import (MAX_PERIOD, classify_period, not_periodic,
+                                     settles_nowhere)
 from kernels.impact.tangent import MAX_SECTION_DIMENSION, NO_TRACKER, make_tracker
 from kernels.impact.runge_kutta import OTHER_METHODS
 from kernels.impact.tuples import from_row
@@ -64,15 +69,10 @@ from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_NONFIN
                                      SEQUENCE_NOT_PERIODIC, SEQUENCE_UNDERFLOW, add)
 
 SPEED_EPS = 1e-7  # a bounce slower than this ends a chatter sequence (H6)
-MAX_PERIOD = 8
-PERIOD_SEPARATION = 1000.0  # see classify_period
 MAX_CONTACTS_PER_SECTION = 200  # a chatter sequence longer than this is not a cycle
 IMPACTS_COUNTED = 100000  # the longest transient counted past a jump
-#: two section states are one attractor's when they agree to this (relative to max(1, |x|))
-ATTRACTOR_TOL = 1e-6
-#: the columns of a row of known cycles (``known``): how its sequence ended, its period, 1
-#: if it chatters, and from KNOWN.key on its section state
-KNOWN = namedtuple("KnownColumns", ["outcome", "period", "chatter", "key"])(0, 1, 2, 3)
+#: the columns of the section log: the rotor angle (mod 2 pi) and psi at each section
+LOG_ROTOR_ANGLE, LOG_PSI = range(2)
 
 #: what a sequence returns: its outcome (outcomes.SEQUENCE_*), the cycle's period and
 #: whether it accumulates a chatter, and over the cycle the amplitude, the free-flight time,
@@ -97,13 +97,6 @@ Driver = namedtuple("Driver", ["steady", "settle", "section", "contact", "restit
 #: margins and canonical section state
 Cycle = namedtuple("Cycle", ["outcome", "chatter", "amplitude", "flight_time", "rotor_angle",
                              "elapsed", "speed", "peak", "residual", "cost", "margins", "key"])
-#: the transient's jumps so far (make_accelerators): the count at the last jump, whether
-#: Broyden's steps are under way and have converged, the secant Jacobian of P(x) - x
-#: (row-major) and its last pair (x, P(x) - x), the state before the last Broyden step,
-#: and the count at the first jump with the last section from rest before it
-Acceleration = namedtuple("Acceleration", ["jumped_at", "secant", "converged", "jac",
-                                           "x_secant", "f_secant", "t_orbit", "y_orbit",
-                                           "first_jump", "x_rest"])
 #: how the transient ended (make_transient): with a result already (``ended``: no cycle, or
 #: the constant map's), or with its count of sections, the period found, the state and
 #: cost there, its jumps, whether it jumped early (an affine map) and the cycle that jump's
@@ -117,228 +110,6 @@ Transient = namedtuple("Transient", ["ended", "steady", "count", "period", "t", 
 Section = namedtuple("Section", ["outcome", "t", "y", "data", "chatter", "amplitude", "peak",
                                  "flight_time", "cost", "speed_min", "speed_max", "edge",
                                  "tangent_ok"])
-
-
-@njit(**INLINE_OPTIONS)
-def relative_distance(x, y, scale):
-    """max_i |x_i - y_i| / max(1, |scale_i|): how far apart two section states are, relative
-    where a component is large and absolute where it is small (the period's repeat, a
-    known attractor, a capture)."""
-    apart = 0.0
-    for i in range(len(x)):
-        apart = max(apart, abs(x[i] - y[i]) / max(1.0, abs(scale[i])))
-    return apart
-
-
-@njit(**KERNEL_OPTIONS)
-def classify_period(history, count, tol, max_period):
-    """Smallest p <= max_period such that the last cycle of p states of an impact map
-    repeats the cycle before it (within tol, relative); 0 if none (yet). history rows
-    0..count-1 are the states at successive sections.
-
-    A p > 1 counts only when its p states lie apart by more than PERIOD_SEPARATION times
-    the repeat's residual and tol: a period-1 transient whose multiplier mu is near -1
-    alternates, and its two-step residual is |1 + mu| times its one-step difference, so it
-    would pass as period 2 long before it converges (a period-1 design with mu = -0.94 was
-    reported as period_n with the two-fold map's mu^2); and where the map's rounding
-    exceeds tol, a period-2 cycle failed its own repeat and passed as period 4 (with mu^2).
-    A genuine p-cycle's residual keeps falling while its states stay apart: it is
-    classified a little later."""
-    last = count - 1
-    for p in range(1, max_period + 1):
-        if last - 2 * p < 0:
-            return 0
-        residual = 0.0
-        for q in range(p):
-            a, b = last - q, last - q - p
-            residual = max(residual, relative_distance(history[a], history[b], history[a]))
-        if residual > tol:
-            continue
-        spread = math.inf  # the closest two states of the p-cycle
-        for j in range(1, p):
-            spread = min(spread, relative_distance(history[last], history[last - j],
-                                                   history[last]))
-        if spread > PERIOD_SEPARATION * max(residual, tol):
-            return p
-        return 0  # a lower period still converging: go on iterating
-    return 0
-
-
-@njit(**KERNEL_OPTIONS)
-def radical_inverse(j, base):
-    """The j-th point of van der Corput's sequence in ``base``, in [0, 1): starting states
-    that fill their range evenly whatever their number, the same at every N (Halton's
-    sequence over bases 2, 3, 5)."""
-    x, scale = 0.0, 1.0 / base
-    while j > 0:
-        x += (j % base) * scale
-        j //= base
-        scale /= base
-    return x
-
-
-@njit(**KERNEL_OPTIONS)
-def aitken(x0, x1, x2):
-    """Aitken's delta-squared limit of x0, x1, x2; x2 itself unless the differences shrink
-    geometrically (ratio in (-0.95, 0.95))."""
-    d1, d2 = x1 - x0, x2 - x1
-    if d1 == 0.0 or d2 == d1 or not abs(d2 / d1) < 0.95:
-        return x2
-    return x2 - d2 * d2 / (d2 - d1)
-
-
-@njit(**KERNEL_OPTIONS)
-def fixed_point_jump(history, count):
-    """The fixed point of the 2-D affine map through the last four sections x0..x3 (rows
-    count-4 .. count-1), and the map's secant Jacobian: with d_j = x_{j+1} - x_j the map's
-    linear part A solves A d0 = d1, A d1 = d2 (minimal polynomial extrapolation), and the
-    fixed point x* = x3 + (I - A)^-1 A d2, exact for an affine map (a smooth map near its
-    fixed point is one to second order). Where d0 and d1 are parallel (one mode left) the
-    ratio q of d2 to d1 stands for A = q I. Returns (jump, x*, J), J = A - I row-major
-    (the Jacobian of x -> P(x) - x, for ``secant_step``): no jump unless both eigenvalues
-    of A lie inside |l| < 0.95 and the jump is at most 20 times the last difference (a map
-    that is not yet near affine)."""
-    a, b, c, d = (history[count - 4], history[count - 3], history[count - 2],
-                  history[count - 1])
-    d0x, d0y = b[0] - a[0], b[1] - a[1]
-    d1x, d1y = c[0] - b[0], c[1] - b[1]
-    d2x, d2y = d[0] - c[0], d[1] - c[1]
-    none = (False, (d[0], d[1]), (0.0, 0.0, 0.0, 0.0))
-    det = d0x * d1y - d1x * d0y
-    if abs(det) > 1e-6 * math.hypot(d0x, d0y) * math.hypot(d1x, d1y):
-        a11, a12 = (d1x * d1y - d2x * d0y) / det, (d2x * d0x - d1x * d1x) / det
-        a21, a22 = (d1y * d1y - d2y * d0y) / det, (d2y * d0x - d1y * d1x) / det
-    else:
-        norm = d1x * d1x + d1y * d1y
-        if norm == 0.0:
-            return none
-        a11 = a22 = (d1x * d2x + d1y * d2y) / norm
-        a12 = a21 = 0.0
-    tr, dt = a11 + a22, a11 * a22 - a12 * a21
-    disc = tr * tr - 4.0 * dt
-    if disc < 0.0:
-        largest = math.sqrt(dt)  # a complex pair: |l|^2 = det A
-    else:
-        largest = 0.5 * (abs(tr) + math.sqrt(disc))
-    if not largest < 0.95:
-        return none
-    jac = (a11 - 1.0, a12, a21, a22 - 1.0)
-    ax, ay = a11 * d2x + a12 * d2y, a21 * d2x + a22 * d2y
-    ok, step = _solve2(jac, (-ax, -ay))  # (I - A)^-1 A d2
-    x = (d[0] + step[0], d[1] + step[1])
-    if not (ok and math.hypot(step[0], step[1]) <= 20.0 * math.hypot(d2x, d2y)):
-        return none
-    return True, x, jac
-
-
-@njit(**KERNEL_OPTIONS)
-def _solve2(m, v):
-    """(ok, m^-1 v) for the row-major 2 x 2 matrix m (ok False where m is singular)."""
-    det = m[0] * m[3] - m[1] * m[2]
-    if det == 0.0 or not math.isfinite(det):
-        return False, (0.0, 0.0)
-    return True, ((m[3] * v[0] - m[1] * v[1]) / det, (m[0] * v[1] - m[2] * v[0]) / det)
-
-
-@njit(**KERNEL_OPTIONS)
-def secant_step(jac, x0, f0, x1, f1):
-    """Broyden's quasi-Newton step for a fixed point of a 2-D map P, on F(x) = P(x) - x:
-    the secant Jacobian jac (row-major) is updated by the pair x0 -> x1 (F(x0) = f0, F(x1) =
-    f1) so that it maps x1 - x0 to f1 - f0 (the least change, Broyden's good update), and
-    the step from x1 is -jac^-1 f1. Returns (ok, jac, step); not ok where the residual did
-    not shrink (|f1| >= |f0|: the map is not near its linearisation), the updated jac is
-    singular, or the step exceeds 20 times the residual (a multiplier within 0.05 of 1)."""
-    sx, sy = x1[0] - x0[0], x1[1] - x0[1]
-    ss = sx * sx + sy * sy
-    a, b, c, d = jac
-    if ss > 0.0:
-        rx = f1[0] - f0[0] - (a * sx + b * sy)
-        ry = f1[1] - f0[1] - (c * sx + d * sy)
-        a, b, c, d = a + rx * sx / ss, b + rx * sy / ss, c + ry * sx / ss, d + ry * sy / ss
-    jac = (a, b, c, d)
-    residual = math.hypot(f1[0], f1[1])
-    ok, step = _solve2(jac, (-f1[0], -f1[1]))
-    ok = (ok and residual < math.hypot(f0[0], f0[1])
-          and math.hypot(step[0], step[1]) <= 20.0 * residual)
-    return ok, jac, step
-
-
-@njit(**KERNEL_OPTIONS)
-def impacts_past_jump(jac, row, x, fixed, tol, limit):
-    """The impacts from rest to the steady state of a sequence that jumped: ``x`` is its
-    last section from rest (row ``row``, before the first jump) and the sequence from rest
-    carries on there by the map's linearisation at its fixed point, x -> fixed + (I + jac)
-    (x - fixed) (jac: the secant Jacobian of P(x) - x). Counted as the plain iteration's
-    classification counts (period 1 at the first row n whose step from row n - 1 is within
-    tol, relative: n - 1 impacts), at most ``limit``."""
-    ex, ey = x[0] - fixed[0], x[1] - fixed[1]
-    sx, sy = max(1.0, abs(fixed[0])), max(1.0, abs(fixed[1]))
-    for n in range(row + 1, limit + 2):
-        dx, dy = jac[0] * ex + jac[1] * ey, jac[2] * ex + jac[3] * ey
-        if not (abs(dx) > tol * sx or abs(dy) > tol * sy):
-            return n - 1
-        ex, ey = ex + dx, ey + dy
-    return limit
-
-
-@njit(**KERNEL_OPTIONS)
-def aitken_jump(history, last):
-    """The 2-D section state by Aitken's delta-squared on rows last - 2 .. last of
-    ``history``, each coordinate on its own: the fixed point of an affine map from three
-    of its iterates (the start and two sections, on a map known to be affine), or the
-    geometric tail removed from the last three sections of a converged sequence."""
-    return (aitken(history[last - 2, 0], history[last - 1, 0], history[last, 0]),
-            aitken(history[last - 2, 1], history[last - 1, 1], history[last, 1]))
-
-
-@njit(**KERNEL_OPTIONS)
-def known_attractor(known, key):
-    """The row of ``known`` (columns KNOWN) whose cycle's section state ``key`` is, to
-    ATTRACTOR_TOL; -1 if none. Rows of sequences that ended without a cycle never
-    match."""
-    for a in range(known.shape[0]):
-        if known[a, KNOWN.outcome] != SEQUENCE_CYCLE:
-            continue
-        state = known[a, KNOWN.key:KNOWN.key + len(key)]
-        if not relative_distance(key, state, state) > ATTRACTOR_TOL:
-            return a
-    return -1
-
-
-#: a start is captured by a known cycle (captured_by) once its section states of the cycle's
-#: phase come within this of the cycle's, each step at most CAPTURE_RATIO of the one before;
-#: two cycles whose section states lie within about twice this of each other may then count
-#: as one attractor (a start passing that near the other's state looks captured)
-CAPTURE_DISTANCE = 1e-4
-CAPTURE_RATIO = 0.9
-
-
-@njit(**KERNEL_OPTIONS)
-def captured_by(known, history, count):
-    """The row of ``known`` (columns KNOWN) whose cycle the sequence of section states
-    ``history`` (rows 0..count-1) is contracting onto: of its last three states p apart (p
-    the cycle's period), each is nearer the cycle's state than the one before by at least
-    CAPTURE_RATIO, the last within CAPTURE_DISTANCE (relative, as ATTRACTOR_TOL); its own
-    steps shrink by CAPTURE_RATIO too, and the cycle's state lies within the reach of their
-    geometric tail (ratio/(1 - ratio) times the last): a sequence that converges elsewhere
-    stops contracting onto it, its steps vanishing while its distance stays. -1 if none."""
-    last = count - 1
-    reach = CAPTURE_RATIO / (1.0 - CAPTURE_RATIO)
-    for a in range(known.shape[0]):
-        if known[a, KNOWN.outcome] != SEQUENCE_CYCLE:
-            continue
-        p = int(known[a, KNOWN.period])
-        if last - 2 * p < 0:
-            continue
-        cycle = known[a, KNOWN.key:KNOWN.key + history.shape[1]]
-        x0, x1, x2 = history[last - 2 * p], history[last - p], history[last]
-        d0, d1 = relative_distance(x0, cycle, cycle), relative_distance(x1, cycle, cycle)
-        d2 = relative_distance(x2, cycle, cycle)
-        s1, s2 = relative_distance(x1, x0, cycle), relative_distance(x2, x1, cycle)
-        if (d2 <= CAPTURE_DISTANCE and d2 <= CAPTURE_RATIO * d1 and d1 <= CAPTURE_RATIO * d0
-                and s2 <= CAPTURE_RATIO * s1 and d2 <= reach * s2):
-            return a
-    return -1
 
 
 @njit(**INLINE_OPTIONS)
@@ -359,85 +130,6 @@ def on_known(cycle, key, impacts, cost):
                   chatter=cycle[KNOWN.chatter] > 0.0,
                   amplitude=0.0, flight_time=0.0, rotor_angle=0.0, elapsed=0.0, speed=0.0,
                   peak=0.0, impacts=impacts, cost=cost, margins=NO_MARGINS, key=key)
-
-
-#: an early verdict needs the weighted Birkhoff averages of the section states over the
-#: last two quarters to agree to this, relative to the states' spread
-BIRKHOFF_AGREEMENT = 1e-6
-
-
-@njit(**KERNEL_OPTIONS)
-def birkhoff_average(history, first, last, i):
-    """The weighted Birkhoff average of component i of rows first .. last - 1 of
-    ``history``, weights exp(-1/(s (1 - s))) at s = (j + 1/2)/(last - first) (Das, Saiki,
-    Sander and Yorke, Nonlinearity 30, 2017): on a quasi-periodic orbit it converges faster
-    than any power of the length, on a chaotic one like its square root."""
-    total = weights = 0.0
-    for j in range(first, last):
-        s = (j - first + 0.5) / (last - first)
-        w = math.exp(-1.0 / (s * (1.0 - s)))
-        total += w * history[j, i]
-        weights += w
-    return total / weights
-
-
-@njit(**KERNEL_OPTIONS)
-def settles_nowhere(history, count, settings, repeat_tol):
-    """The early verdict "not periodic" for a quasi-periodic sequence, at section counts n
-    that are powers of two from settings.verdict_from, below the budget N =
-    settings.max_impacts. Over the last half of the sequence, split into two quarters:
-    (1) each component's weighted Birkhoff averages over the quarters agree to
-    BIRKHOFF_AGREEMENT of its spread (a quasi-periodic orbit, or a periodic one; a chaotic
-    one's agree to about 1e-2: it flies the budget, as it may still end without an
-    impact, as 3 of 120 random blade designs did); (2) for every period p <= MAX_PERIOD,
-    the differences of states p sections apart (relative, as classify_period takes them)
-    stay above 1000 repeat_tol, and over the last quarter are, on average and at their
-    largest, at least 0.1^(n/(4N)) of those over the quarter before: no cycle is near (9
-    designs of the stability example, converging slowly to a period-n cycle, passed (1)
-    and the steps of p = 1 alone). A transient whose differences shrink geometrically by
-    rho a section passes (2) only where rho >= 0.1^(1/N), which the budget's own verdict
-    (not_periodic: the step at N over a tenth of the one at N/2, rho > 0.1^(2/N)) calls
-    not periodic too."""
-    n, budget = count, settings.max_impacts
-    if settings.verdict_from <= 0 or n < settings.verdict_from or n >= budget or (
-            n & (n - 1)) != 0:
-        return False
-    quarter = n // 4
-    for i in range(history.shape[1]):
-        spread = 0.0
-        for j in range(n - 2 * quarter, n):
-            spread = max(spread, abs(history[j, i] - history[n - 1, i]))
-        drift = abs(birkhoff_average(history, n - 2 * quarter, n - quarter, i)
-                    - birkhoff_average(history, n - quarter, n, i))
-        if not drift <= BIRKHOFF_AGREEMENT * spread:
-            return False
-    floor = 0.1 ** (n / (4.0 * budget))
-    for p in range(1, MAX_PERIOD + 1):
-        mean, largest, smallest = np.zeros(2), np.zeros(2), math.inf
-        for half in range(2):
-            for j in range(n - (2 - half) * quarter, n - (1 - half) * quarter):
-                step = relative_distance(history[j], history[j - p], history[j])
-                mean[half] += step / quarter
-                largest[half] = max(largest[half], step)
-                if half == 1:
-                    smallest = min(smallest, step)
-        if not (smallest > 1000.0 * repeat_tol and mean[1] >= floor * mean[0]
-                and largest[1] >= floor * largest[0]):
-            return False
-    return True
-
-
-@njit(**KERNEL_OPTIONS)
-def not_periodic(history, count):
-    """How a sequence that found no cycle within its budget ended: not periodic where its
-    map has stopped contracting (its last step is over a tenth of the one half-way), else
-    still converging (max_steps)."""
-    recent = older = 0.0
-    for i in range(history.shape[1]):
-        recent = max(recent, abs(history[count - 1, i] - history[count - 2, i]))
-        older = max(older, abs(history[count // 2, i] - history[count // 2 - 1, i]))
-    return (SEQUENCE_NOT_PERIODIC if count >= 20 and recent > 0.1 * older else
-            SEQUENCE_MAX_STEPS)
 
 
 @njit(**INLINE_OPTIONS)
@@ -650,67 +342,6 @@ def make_cycle(c, section, tracker):
     return cycle
 
 
-def make_accelerators(c):
-    """The transient's jumps on a Contact with a 2-D section state: ``land`` moves the
-    sequence to a section state, ``fixed_point`` jumps to the fixed point of the affine map
-    through the last four sections (fixed_point_jump), ``broyden`` takes Broyden's step one
-    section after a jump (secant_step). Each returns the new Acceleration and (t, y)."""
-    key_of, from_key = c.key, c.from_key
-
-    @njit(**INNER_OPTIONS)
-    def land(x, t, y, data, p, history, row):
-        """The state with section state x at the rotor angle of (t, y), written as row
-        ``row`` of ``history`` (the section it replaces)."""
-        t, y = from_key(x, t, y, data, p)
-        key = key_of(t, y, data, p)
-        for i in range(len(key)):
-            history[row, i] = key[i]
-        return t, y
-
-    @njit(**INNER_OPTIONS)
-    def fixed_point(a, history, count, t, y, data, p):
-        jump, x, jac = fixed_point_jump(history, count)
-        if not jump:  # the last secant Jacobian stays (impacts_past_jump counts on it)
-            return (Acceleration(jumped_at=a.jumped_at, secant=a.secant, converged=a.converged,
-                                 jac=a.jac, x_secant=a.x_secant, f_secant=a.f_secant,
-                                 t_orbit=a.t_orbit, y_orbit=a.y_orbit,
-                                 first_jump=a.first_jump, x_rest=a.x_rest), t, y)
-        x_from = (history[count - 1, 0], history[count - 1, 1])
-        x_secant = (history[count - 2, 0], history[count - 2, 1])
-        f_secant = (x_from[0] - x_secant[0], x_from[1] - x_secant[1])
-        t, y = land(x, t, y, data, p, history, count - 1)
-        first = a.first_jump == 0  # the first jump: where the sequence from rest ends
-        return (Acceleration(jumped_at=count, secant=True, converged=a.converged, jac=jac,
-                             x_secant=x_secant, f_secant=f_secant, t_orbit=a.t_orbit,
-                             y_orbit=a.y_orbit, first_jump=count if first else a.first_jump,
-                             x_rest=x_from if first else a.x_rest), t, y)
-
-    @njit(**INNER_OPTIONS)
-    def broyden(a, history, count, t, y, data, p, repeat_tol):
-        """One section after a jump to x (row count - 2), at P(x): Broyden's step to the
-        fixed point; converged at the first step within repeat_tol (the steps shrink
-        superlinearly, so where it lands is well within it); where the step fails (not
-        near the map's linearisation) plain sections go on, jumps later."""
-        x = (history[count - 2, 0], history[count - 2, 1])
-        f = (history[count - 1, 0] - x[0], history[count - 1, 1] - x[1])
-        going, jac, step = secant_step(a.jac, a.x_secant, a.f_secant, x, f)
-        if not going:
-            return (Acceleration(jumped_at=a.jumped_at, secant=False, converged=False,
-                                 jac=jac, x_secant=x, f_secant=f, t_orbit=a.t_orbit,
-                                 y_orbit=a.y_orbit, first_jump=a.first_jump,
-                                 x_rest=a.x_rest), t, y)
-        to = (x[0] + step[0], x[1] + step[1])
-        t_orbit, y_orbit = t, y
-        t, y = land(to, t, y, data, p, history, count - 1)
-        converged = (abs(step[0]) <= repeat_tol * max(1.0, abs(to[0]))
-                     and abs(step[1]) <= repeat_tol * max(1.0, abs(to[1])))
-        return (Acceleration(jumped_at=count, secant=True, converged=converged, jac=jac,
-                             x_secant=x, f_secant=f, t_orbit=t_orbit, y_orbit=y_orbit,
-                             first_jump=a.first_jump, x_rest=a.x_rest), t, y)
-
-    return land, fixed_point, broyden
-
-
 def make_record(c):
     """``record(t, y, data, p, history, row, log) -> key``: a section's state into row
     ``row`` of ``history``, and its rotor angle (mod 2 pi) and psi into ``log`` (its last
@@ -723,7 +354,8 @@ def make_record(c):
         for i in range(len(key)):
             history[row, i] = key[i]
         slot = min(row, log.shape[0] - 1)
-        log[slot, 0], log[slot, 1] = rotor_angle(t, y) % (2.0 * math.pi), psi_of(y)
+        log[slot, LOG_ROTOR_ANGLE] = rotor_angle(t, y) % (2.0 * math.pi)
+        log[slot, LOG_PSI] = psi_of(y)
         return key
 
     return record

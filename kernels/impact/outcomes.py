@@ -22,7 +22,7 @@ NO_COST = Counters(0, 0, 0)
 #: (runge_kutta.METHOD_*), its tolerances, the fixed step (RK4's ``dt``, or the exact flow's
 #: step), a flight's step budget and horizon (in the flight's time), and for an impact
 #: sequence its budget of impacts, the starting states per case, and the first section
-#: count at which it may be called not periodic before its budget (impact_map.settles_nowhere;
+#: count at which it may be called not periodic before its budget (verdicts.settles_nowhere;
 #: 0: only at the budget); ``finer_by`` > 1: each sequence that reaches a cycle goes on from
 #: it at rtol and atol finer_by times smaller to the cycle there (a second solve that need
 #: not fly the transient again; 0: one solve); where the first start's two stages differ by

@@ -249,8 +249,8 @@ def make_tangent_flight(c, n, methods=OTHER_METHODS):
         g_dot = g_phi * rotor_speed(y1) + g_psi * rate + g_dpsi * accel
         grad = state((0.0, g_phi, 0.0, g_psi, g_dpsi))  # in the model's state
         for j in range(d):
-            dy0 = state((tangent[0, j], tangent[1, j], tangent[2, j], tangent[3, j],
-                         tangent[4, j]))
+            dy0 = state((tangent[DT, j], tangent[DPHI, j], tangent[DW, j], tangent[DPSI, j],
+                         tangent[DDPSI, j]))
             dy, dt1 = carry(m, dy0, tangent[DT, j], f1, grad, g_dot)
             out = coordinates(dt1, dy)
             for i in range(5):

@@ -8,15 +8,32 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS
-from kernels.impact.impact_map import radical_inverse
+from kernels.impact.attractors import radical_inverse
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_ESCAPE, SEQUENCE_SEPARATRIX
 from kernels.pendulum.cases import ROW, C
-from kernels.pendulum.models import (MODEL_PAPER, closed_flight, impacts_to_converge,
-                                     paper_critical, rigid_critical, steady_state_speed)
+from kernels.pendulum.free_flight import (impacts_to_converge, paper_amplitude,
+                                          paper_critical, paper_half_period,
+                                          paper_peak_acceleration, rigid_critical,
+                                          rigid_flight, steady_state_speed)
+from kernels.pendulum.models import MODEL_PAPER
 
 #: a launch speed within this (relative) of the escape threshold is on the separatrix: the
 #: flight's time diverges like its logarithm, beyond what any method resolves (H1, H2)
 SEPARATRIX = 64 * 2.220446049250313e-16
+
+
+@njit(**KERNEL_OPTIONS)
+def closed_flight(model, v, p):
+    """A driven flight from psi = 0 at speed v back to psi = 0, in closed form: (amplitude,
+    flight time, peak |psi''|); NaNs if it does not come back."""
+    if model == MODEL_PAPER:
+        k, xi = p
+        amplitude = paper_amplitude(v, k, xi)
+        return (amplitude, paper_half_period(v, k, xi, amplitude),
+                paper_peak_acceleration(v, k, xi, amplitude))
+    k, kappa = p
+    return rigid_flight(v, k * kappa)
+
 
 
 @njit(**KERNEL_OPTIONS)

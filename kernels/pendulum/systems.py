@@ -16,11 +16,13 @@ import numpy as np
 from numba import njit
 
 from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
-from kernels.impact.impact_map import (ATTRACTOR_TOL, KNOWN, known_attractor,
-                                       make_impact_map, relative_distance, with_cost)
+from kernels.cache import module_level
+from kernels.impact.attractors import (ATTRACTOR_TOL, KNOWN, known_attractor,
+                                      relative_distance)
+from kernels.impact.impact_map import make_impact_map, with_cost
 from kernels.impact.outcomes import SEQUENCE_CYCLE, SEQUENCE_MAX_STEPS, Settings, add
 from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_RK4, OTHER_METHODS, low_order
-from kernels.pendulum import models, tools
+from kernels.pendulum import blade, models, tools
 from kernels.pendulum.accuracy import cycle_error
 from kernels.pendulum.cases import C, N_ROW, ROW
 from kernels.pendulum.table import RETURNING_TOOLS, SYSTEMS, entry_name
@@ -63,6 +65,8 @@ def lab_window_data(case):
     return (-tools.TWO_PI, case[C.tool_window], case[C.k], 0.0, 1.0)
 
 
+#: the rows of a case's two stages (auto's coarser and finer solve)
+FIRST_STAGE, SECOND_STAGE = range(2)
 #: the longest section state of a tool (the blade's: psi, the gap's rate, the rotor speed)
 MAX_KEY = 3
 
@@ -102,7 +106,8 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
         the first one's cycle (its period and chatter), the finer solve starts again,
         except from rest where auto's next round follows (settings.accept < inf): that
         round starts with the same solve."""
-        first, t, y, d = steady(p, data, r, settings, tols[0], log, start, known)
+        tol_first, tol_finer = tols
+        first, t, y, d = steady(p, data, r, settings, tol_first, log, start, known)
         if not two_stage:  # its own test, so that numba prunes the second stage away
             return first, first
         cycle = first.outcome == SEQUENCE_CYCLE
@@ -113,7 +118,8 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
                 return first, first  # on a cycle another start found: its second stage ran
         cost = first.cost
         if cycle:
-            then = settle(p, d, r, finer, tols[1], scratch, t, y, known)[0]
+            then, t_then, y_then, d_then = settle(p, d, r, finer, tol_finer, scratch, t, y,
+                                                  known)
             cost = add(cost, then.cost)
             if (then.outcome == SEQUENCE_CYCLE and then.period == first.period
                     and then.chatter == first.chatter):
@@ -126,7 +132,8 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
         # undetermined, or not the first stage's cycle where it went on from it (a slow
         # drift taken for a cycle, a chatter that settles otherwise): the finer solve from
         # the start, as the first stage ran
-        again = steady(p, data, r, finer, tols[1], scratch, start, known)[0]
+        again, t_again, y_again, d_again = steady(p, data, r, finer, tol_finer, scratch,
+                                                  start, known)
         return with_cost(again, again.impacts, add(cost, again.cost)), first
 
     @njit(**INNER_OPTIONS)
@@ -138,7 +145,7 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
         tols = (section_repeat_tol(settings.method, settings.rtol),
                 section_repeat_tol(finer.method, finer.rtol))
         starts = settings.starts
-        # per start: its steady state in the columns of impact_map.KNOWN
+        # per start: its steady state in the columns of attractors.KNOWN
         seen = np.empty((starts, KNOWN.key + MAX_KEY))
         scratch = np.empty((1, 2))
         pair = np.empty((2, N_ROW))  # the rows of the first start's two stages
@@ -154,9 +161,10 @@ def make_block(contact, jump_early, parameters, data_of, frequency, stability=Fa
             if several_starts:
                 # a case solved again finer (its estimate misses settings.accept) counts
                 # its attractors only in the solve it ends in
-                write_row(pair[0], first, first.cost, 1.0, 1.0, frequency)
-                write_row(pair[1], s, s.cost, 1.0, 1.0, frequency)
-                again = cycle_error(pair[0], pair[1], settings.margins) > settings.accept
+                write_row(pair[FIRST_STAGE], first, first.cost, 1.0, 1.0, frequency)
+                write_row(pair[SECOND_STAGE], s, s.cost, 1.0, 1.0, frequency)
+                again = cycle_error(pair[FIRST_STAGE], pair[SECOND_STAGE],
+                                    settings.margins) > settings.accept
                 if again:
                     attractors, basin = math.nan, math.nan
                 elif starts > 1:
@@ -224,7 +232,7 @@ def write_row(row, s, cost, attractors, basin, frequency):
 
 @njit(**INLINE_OPTIONS)
 def remember(seen, j, s):
-    """A start's Steady ``s`` into row j of ``seen`` (columns impact_map.KNOWN)."""
+    """A start's Steady ``s`` into row j of ``seen`` (columns attractors.KNOWN)."""
     seen[j, KNOWN.outcome], seen[j, KNOWN.period] = s.outcome, s.period
     seen[j, KNOWN.chatter] = 1.0 if s.chatter else 0.0
     for i in range(len(s.key)):
@@ -233,7 +241,7 @@ def remember(seen, j, s):
 
 @njit(**KERNEL_OPTIONS)
 def _same_attractor(seen, a, b, n_keys):
-    """Rows a and b of ``seen`` (columns impact_map.KNOWN): the same attractor? A sequence
+    """Rows a and b of ``seen`` (columns attractors.KNOWN): the same attractor? A sequence
     that ends without a cycle (escape, no impact, ...) is one attractor per outcome."""
     for i in range(KNOWN.key):
         if seen[a, i] != seen[b, i]:
@@ -247,6 +255,8 @@ def _same_attractor(seen, a, b, n_keys):
 PARAMETERS = {"paper": paper_parameters, "rigid": rigid_parameters,
                "rotor": rotor_parameters}
 DATA = {"rotor_stop": rotor_stop_data, "lab_window": lab_window_data}
+#: each tool's contact factory, by the table's names
+TOOL_CONTACTS = {"rotor_stop": tools.rotor_stop, "lab_window": blade.lab_window}
 #: the methods compiled into a contact's flights beside DOPRI5 (and the exact flow), one
 #: variant each: none, DOP853 (tight tol), RK4 (asked for)
 COMPILED = ((), (METHOD_DOP853,), (METHOD_RK4,))
@@ -286,7 +296,7 @@ class Lazy(Mapping):
 
 
 def _contact(model, tool, methods):
-    return getattr(tools, tool)(getattr(models, model.upper()), methods)
+    return TOOL_CONTACTS[tool](getattr(models, model.upper()), methods)
 
 
 #: each system's contact (the core's description of it), by the table's names and COMPILED
@@ -295,7 +305,7 @@ CONTACTS = Lazy(((s.model, s.tool, methods) for s in SYSTEMS for methods in COMP
 #: a flight's step budget
 MAX_STEPS = 10 ** 6
 #: the first section count at which a sequence may be called not periodic before its
-#: budget of impacts (impact_map.settles_nowhere)
+#: budget of impacts (verdicts.settles_nowhere)
 VERDICT_FROM = 64
 
 
@@ -312,26 +322,13 @@ def build_block(system, contact, parameters, data_of, stability=False, returning
                       methods, two_stage, several_starts)
 
 
-#: a module-level entry point: numba caches a function on disk by its name and source
-#: file, and a closure called from Python would be compiled again in every process
-_ENTRY = ("def {name}(cases, settings, rows, first_rows, log):\n"
-          "    _{name}(cases, settings, rows, first_rows, log)\n")
-
-
-def _entry_point(name: str, block):
-    namespace = globals()
-    namespace["_" + name] = block
-    exec(compile(_ENTRY.format(name=name), __file__, "exec"), namespace)
-    namespace[name] = njit(**KERNEL_OPTIONS)(namespace[name])
-    return namespace[name]
-
-
 def _system_entry_point(system, tangent, methods, two_stage, several_starts):
-    return _entry_point(
-        entry_name(system, tangent, methods, two_stage, several_starts),
-        build_block(system, CONTACTS[system.model, system.tool, methods],
-                    PARAMETERS[system.model], DATA[system.tool], stability=tangent,
-                    methods=methods, two_stage=two_stage, several_starts=several_starts))
+    """A module-level entry point (cache.module_level), cached on disk by its name."""
+    block = build_block(system, CONTACTS[system.model, system.tool, methods],
+                        PARAMETERS[system.model], DATA[system.tool], stability=tangent,
+                        methods=methods, two_stage=two_stage, several_starts=several_starts)
+    return module_level(block, entry_name(system, tangent, methods, two_stage,
+                                          several_starts), globals(), KERNEL_OPTIONS)
 
 
 #: the entry points of each system (a table row) by (system, tangent, methods, two_stage,

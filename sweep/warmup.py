@@ -1,0 +1,159 @@
+"""Compiling ahead: numba compiles a kernel on its first call and keeps it in its on-disk
+cache (kernels/cache.py), so a first sweep waits for the compiler and every later one
+starts at once. Here the compiles are jobs run in processes of their own, as many at a time
+as there are cores (a compile holds its process's interpreter: threads would not overlap),
+each filling the cache that the sweeps, and the other processes, then load.
+
+- ``sweep warmup [MECHANISM ...]`` compiles what the built-in examples and each pendulum
+  system under the default method need (``mechanism_jobs``), once per installation;
+- a run whose spec needs several entry points (the pendulum's models and tools on a grid)
+  compiles them side by side (``compile_in_parallel``, from ``runner.compile_first``);
+- the test suite compiles what its fast loop needs before the tests start
+  (tests/warmup.py).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import importlib
+import multiprocessing
+import os
+import sys
+import time
+from dataclasses import dataclass
+from typing import Callable, Iterable, Sequence
+
+from sweep.errors import UserError
+
+
+@dataclass(frozen=True)
+class Job:
+    """One compile: ``function`` ("module:name") called with ``arguments`` in a process of
+    its own; ``name`` says what it compiles."""
+
+    name: str
+    function: str
+    arguments: tuple = ()
+
+
+def run_job(job: Job) -> tuple[str, float]:
+    """Run a job here: (its name, the CPU seconds it took)."""
+    module, name = job.function.split(":")
+    started = time.process_time()
+    getattr(importlib.import_module(module), name)(*job.arguments)
+    return job.name, time.process_time() - started
+
+
+def cores() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0)) or 1
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def run_jobs(jobs: Sequence[Job], workers: int | None = None,
+             done: Callable[[str, float], None] | None = None) -> dict[str, float]:
+    """Run the jobs in at most ``workers`` processes (default: the cores), the first ones
+    first (put the longest first); ``done(name, cpu_seconds)`` after each. Returns the
+    CPU seconds of each job by name. A job that fails raises its error here, after the
+    others finished."""
+    workers = max(1, min(workers or cores(), len(jobs)))
+    times: dict[str, float] = {}
+    failure = None
+    # spawn: a fork of a process that has numba's threads or compiler state is not safe
+    with cf.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                                initializer=_quiet_worker) as pool:
+        for future in cf.as_completed([pool.submit(run_job, job) for job in jobs]):
+            try:
+                name, seconds = future.result()
+            except Exception as err:  # noqa: BLE001 (reported once all have ended)
+                failure = failure or err
+                continue
+            times[name] = seconds
+            if done is not None:
+                done(name, seconds)
+    if failure is not None:
+        raise failure
+    return times
+
+
+def _quiet_worker() -> None:
+    """A compile process uses one thread: the cores are the pool's."""
+    os.environ["NUMBA_NUM_THREADS"] = "1"
+
+
+# ---------------------------------------------------------------- what to compile
+
+def compile_spec(given, columns: Sequence[int] | None = None) -> None:
+    """Compile what a spec (TOML text, or a Sweep) needs: its kernel on its sample points
+    (engine.sample_parameters), or on the given columns of them."""
+    from sweep import engine, spec
+
+    sweep = spec.parse(given, source="warm-up") if isinstance(given, str) else given
+    params = engine.sample_parameters(sweep)
+    if columns is not None:
+        params = params[:, list(columns)]
+    with engine.numba_without_blas():
+        sweep.kernel(params, sweep.method_record)
+
+
+def example_jobs(names: Iterable[str]) -> list[Job]:
+    """A job per built-in example: what its first run compiles."""
+    from sweep import example_specs
+
+    return [Job(f"example {name}", "sweep.warmup:compile_spec", (example_specs.text(name),))
+            for name in names]
+
+
+def pendulum_system_jobs() -> list[Job]:
+    """A job per pendulum system (model x tool) under the default method: the sweep a
+    designer runs first on each."""
+    from kernels.pendulum.table import SYSTEMS
+
+    return [Job(f"rotary_pendulum {s.model} on {s.tool}", "sweep.warmup:compile_spec",
+                (f'mechanism = "rotary_pendulum"\n[fixed]\nmodel = "{s.model}"\n'
+                 f'tool = "{s.tool}"\nkappa = 1.2\n',))
+            for s in SYSTEMS]
+
+
+def mechanism_jobs(mechanisms: Sequence[str] | None = None) -> list[Job]:
+    """What ``sweep warmup`` compiles for these mechanisms (default: every one): each
+    built-in example of them and, for the rotary pendulum, each system under the default
+    method; the pendulum's first (its compiles are the longest)."""
+    from sweep import example_specs, registry
+
+    known = sorted(registry.MECHANISMS)
+    chosen = list(mechanisms) if mechanisms else known
+    for name in chosen:
+        if name not in registry.MECHANISMS:
+            raise UserError(f"mechanism: unknown mechanism {name!r}; allowed: "
+                            + ", ".join(known))
+    of_example = example_specs.mechanisms()
+    jobs = pendulum_system_jobs() if "rotary_pendulum" in chosen else []
+    pendulum_first = sorted(of_example, key=lambda n: of_example[n] != "rotary_pendulum")
+    return jobs + example_jobs(n for n in pendulum_first if of_example[n] in chosen)
+
+
+def warm_up_mechanisms(mechanisms: Sequence[str] | None = None, workers: int | None = None,
+                       progress: bool = False) -> dict[str, float]:
+    """Fill the compile cache for these mechanisms (``mechanism_jobs``) in parallel
+    processes, with a progress bar on request; the CPU seconds of each job by name."""
+    jobs = mechanism_jobs(mechanisms)
+    if not progress:
+        return run_jobs(jobs, workers)
+    from tqdm import tqdm
+
+    with tqdm(total=len(jobs), desc="compiling", unit="job", file=sys.stderr) as bar:
+        def done(name, seconds):
+            bar.set_postfix_str(f"{name} ({seconds:.0f} CPU s)", refresh=False)
+            bar.update()
+        return run_jobs(jobs, workers, done)
+
+
+def compile_in_parallel(sweep, groups: Sequence[Sequence[int]],
+                        workers: int | None = None) -> None:
+    """Compile each group of a sweep's sample points (columns that run entry points of
+    their own) in a process of its own, so that this process then loads them all."""
+    run_jobs([Job(f"group {i}", "sweep.warmup:compile_spec", (sweep, tuple(g)))
+              for i, g in enumerate(groups)], workers)
