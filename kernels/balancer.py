@@ -30,7 +30,28 @@ NEUTRAL_HALF_SWING, NEUTRAL_MEAN = 0, 1
 SI_OUTPUTS = ("spring_stiffness", "shaft_stiffness", "moment_peak_free",
               "moment_peak_balanced")
 
+#: the short label a chart shows of each parameter and output (Quantity.label)
+LABELS = {
+    "lambda0": r"base ratio $\lambda_0$", "lambda2": r"coupler ratio $\lambda_2$",
+    "lambda3": r"rocker ratio $\lambda_3$", "sigma": r"branch $\sigma$",
+    "f": "speed coefficient $f$", "r": "stiffness ratio $r$", "eta": r"damping $\eta$",
+    "driven_inertia": "driven inertia $I_m$", "crank_speed": r"crank speed $\omega$",
+    "spring_neutral": "spring neutral", "swing": r"rocker swing $\gamma_0$",
+    "moment_invariant_peak_free": r"moment invariant $M_{i,\max}$ (free)",
+    "moment_invariant_peak_balanced": r"moment invariant $M_{zr,\max}$ (balanced)",
+    "balancing_coefficient": "balancing coefficient $K$",
+    "dynamic_coefficient_free": "dynamic coefficient $K_d$ free",
+    "dynamic_coefficient_balanced": "dynamic coefficient $K_d$ balanced",
+    "acceleration_invariant_rigid": "peak acceleration (rigid)",
+    "harmonics_used": "harmonics", "truncation_error": "truncation error",
+    "resonance_margin": "resonance margin", "spring_stiffness": "spring stiffness $c_{sp}$",
+    "shaft_stiffness": "shaft stiffness $c$", "moment_peak_free": r"peak moment $M_\max$ free",
+    "moment_peak_balanced": r"peak moment $M_{zr,\max}$ balanced",
+}
+
+
 DECLARATION = Mechanism(
+    labels=LABELS,
     name="spring_balancer",
     title="Leaf-spring balancer on a four-bar: steady state by Fourier series",
     summary="rocker motion from the loop closure, Fourier coefficients by rFFT once per "

@@ -161,7 +161,7 @@ def module_level(inner, name: str, namespace: dict, options: dict):
     calls it: numba caches a module-level function on disk by its name and file, where
     a closure called from Python is compiled again in every process. ``name`` must say
     everything that makes ``inner`` what it is (a system, a method, a variant)."""
-    arguments = ", ".join(inspect.signature(inner.py_func).parameters)
+    arguments = ", ".join(inspect.signature(getattr(inner, "py_func", inner)).parameters)
     namespace["_" + name] = inner
     exec(compile(f"def {name}({arguments}):\n    return _{name}({arguments})\n",
                  namespace["__file__"], "exec"), namespace)

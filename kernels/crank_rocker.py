@@ -68,7 +68,28 @@ def _rules(given: dict) -> str | None:
     return None
 
 
+#: the short label a chart shows of each parameter and output (Quantity.label)
+LABELS = {
+    "type": "type", "R": "restitution $R$", "largest_link": "largest link ratio",
+    "lambda0": r"base ratio $\lambda_0$", "lambda2": r"rod ratio $\lambda_2$",
+    "lambda3": r"rocker ratio $\lambda_3$", "base_root": "base root",
+    "crank_length": "crank $l_1$", "envelope": "envelope $L$", "omega1": r"crank speed $\omega_1$",
+    "impact_speed_limit": "impact speed limit", "sigma": r"branch $\sigma$",
+    "rocker_inertia": "rocker inertia $J_{D3}$", "gamma": r"node parameter $\gamma$",
+    "restitution_kinematic": "kinematic restitution $R_k$",
+    "transfer_before": r"$u_{31}$ before the node", "transfer_after": r"$u_{31}$ after the node",
+    "impact_transfer_ratio": r"$|u_{31}|$ at impact", "impact_speed": "impact speed $v$",
+    "crank_turns_fully": "crank turns fully",
+    "transmission_angle_working": r"working transmission angle $\mu$",
+    "transmission_angle_opposite": r"transmission angle opposite $\mu$",
+    "assembly_branch": r"branch $\sigma$", "special_crank_angle": r"node angle $\varphi_1^*$",
+    "blow_energy": "blow energy $E$", "blow_rate": "blow rate",
+    "special_position_count": "special positions", "restitution_kinematic_max": r"largest $|R_k|$",
+}
+
+
 DECLARATION = Mechanism(
+    labels=LABELS,
     name="crank_rocker",
     title="Crank-rocker impact four-bar: synthesis and kinematic restitution",
     summary="closed form: synthesis (the paper's eqs. 10-11; the type-b quadratic derived "

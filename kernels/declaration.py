@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections import namedtuple
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Callable
 
@@ -55,6 +55,10 @@ class Quantity:
     #: another parameter this one is given instead of (envelope for crank_length): where
     #: this one is given, the other's default is not used (its code is NaN, not recorded)
     replaces: str | None = None
+    #: the short label a chart shows beside the units: a symbol and a few words, in
+    #: matplotlib's mathtext (``r"crank speed $\omega_1$"``); declared in the mechanism's
+    #: ``labels``
+    label: str = ""
     #: each value of this categorical quantity runs code of its own (an entry point
     #: compiled apart): a first run compiles the values on a grid in parallel processes
     compiles_apart: bool = False
@@ -127,6 +131,8 @@ class Output:
     #: (units, factor) a chart shows the output in instead of its own: ("turn", 1/(2 pi))
     #: for a rotor angle of many turns
     chart_units: tuple | None = None
+    #: the short label a chart shows beside the units (see Quantity.label)
+    label: str = ""
 
     @property
     def is_flag(self) -> bool:
@@ -183,8 +189,18 @@ class Mechanism:
     whole_axes: tuple[str, ...] = ()
     rules: Callable[[dict], str | None] | None = None
     boundaries: tuple[Boundary, ...] = ()
+    #: the short label of each parameter, output and profile, and of the profile
+    #: dimension, by name (Quantity.label): what a chart shows, never the long_name
+    labels: dict = field(default_factory=dict)
 
     def __post_init__(self):
+        def labelled(items):
+            return tuple(replace(q, label=self.labels.get(q.name, q.label)) for q in items)
+
+        for kind in ("parameters", "outputs", "profiles"):
+            object.__setattr__(self, kind, labelled(getattr(self, kind)))
+        if self.profile_dim is not None:
+            object.__setattr__(self, "profile_dim", labelled((self.profile_dim,))[0])
         for kind, items in (("parameter", self.parameters), ("output", self.outputs),
                             ("profile", self.profiles), ("method key", self.method)):
             names = [q.name for q in items]

@@ -30,17 +30,23 @@ from kernels.extrema import cell_midpoints
 from kernels.fourbar import CHANGE_POINT_C
 from kernels.impact.outcomes import Settings as CoreSettings
 from kernels.impact.runge_kutta import METHOD_DOPRI5
-from kernels.machine.cycle import (CYCLE_ENDED, CYCLE_NO_CONVERGENCE, CYCLE_REVERSES,
-                                   CYCLE_STEADY, solve, speed_fluctuation)
+from kernels.machine.cycle import (CYCLE_ENDED, CYCLE_GAINS_ENERGY, CYCLE_NO_CONVERGENCE,
+                                   CYCLE_REVERSES, CYCLE_STEADY, solve, speed_fluctuation)
 from kernels.machine.data import Linkage, Loads, Machine, Masses, Motor, no_machine
 from kernels.machine.declaration import DECLARATION  # noqa: F401 (the registry's)
-from kernels.machine.declaration import FOR_DELTA, LAW_GENERALIZED, MATERIAL, F, O, P, S
+from kernels.machine.declaration import (FOR_DELTA, LAW_GENERALIZED, LAW_KINEMATIC, MATERIAL,
+                                         F, O, P, S)
 from kernels.machine.dynamics import crank_motion, inertia_is_singular, motor_torque
-from kernels.machine.flywheel import classical_flywheel, exact_flywheel, sized_flywheel
+from kernels.machine.flywheel import classical_flywheel, exact_flywheel
+from kernels.machine.motor import (MOTOR_FOUND, MOTOR_UNREACHABLE, flywheel_at,
+                                   idle_for_speed, with_idle)
 from kernels.machine.forces import dynamic_force_peaks
 from kernels.machine.revolution import (ANGLE, ENERGY, REV_MAX_STEPS, REV_STALL,
                                         REV_TOO_SLOW, REV_UNDERFLOW, after_blow,
                                         timed_revolution)
+
+#: flywheel_sizing's codes
+FLYWHEEL_GIVEN, FLYWHEEL_SIZED, FLYWHEEL_NOT_NEEDED = 0, 1, 2
 
 # ---------------------------------------------------------------- statuses, mapped once
 
@@ -73,6 +79,8 @@ def cycle_status(cycle):
         return S.reverses
     if cycle.outcome == CYCLE_NO_CONVERGENCE:
         return S.no_convergence
+    if cycle.outcome == CYCLE_GAINS_ENERGY:
+        return S.gains_energy
     end = cycle.rev.end
     if cycle.outcome != CYCLE_ENDED:
         return S.nonfinite
@@ -199,11 +207,24 @@ def design(i, pr, settings, out, prof):
     core = CoreSettings(method=METHOD_DOPRI5, rtol=settings.tol, atol=settings.tol, dt=0.0,
                         max_steps=10 ** 6, horizon=2.0 * math.pi + 1.0)
     flywheel = pr[P.flywheel_inertia]
-    if flywheel == FOR_DELTA:  # the flywheel a delta target asks for: sized first
-        flywheel = sized_flywheel(m, crank_own, r, law, core, revolutions, start_mode, delta)
-        if not math.isfinite(flywheel):
+    sized = flywheel == FOR_DELTA  # the flywheel a delta target asks for: sized first
+    target = pr[P.omega1]
+    if math.isfinite(target):  # the idle speed the mean crank speed asks for
+        found, idle = idle_for_speed(m, crank_own, flywheel, sized, r, law, core,
+                                     revolutions, start_mode, delta, target)
+        if found == MOTOR_UNREACHABLE:
+            return S.unreachable_speed
+        if found != MOTOR_FOUND:
             return S.no_convergence
+        m = with_idle(m, idle)
+    out[O.idle_speed] = m.motor.idle_speed
+    flywheel = flywheel_at(m, crank_own, flywheel, sized, r, law, core, revolutions,
+                           start_mode, delta)
+    if not math.isfinite(flywheel):
+        return S.no_convergence
     out[O.flywheel_inertia] = flywheel
+    out[O.flywheel_sizing] = (FLYWHEEL_GIVEN if not sized else
+                              FLYWHEEL_NOT_NEEDED if flywheel == 0.0 else FLYWHEEL_SIZED)
     cycle, nd, m = solve(m, crank_own, flywheel, r, law, core, revolutions, start_mode)
     out[O.revolutions], out[O.n_steps] = cycle.revolutions, cycle.steps
     status = cycle_status(cycle)
@@ -226,16 +247,21 @@ def design(i, pr, settings, out, prof):
     out[O.motor_power_mean] = rev.motor_work / period
     out[O.blow_energy] = 0.5 * m.masses.jd3 * (u31m * w_minus) ** 2
     out[O.blow_loss] = b.loss
-    out[O.energy_to_material] = b.tool
-    out[O.capture_loss] = b.capture
+    if law != LAW_KINEMATIC:  # the kinematic law's loss has no split (it may be negative)
+        out[O.energy_to_material] = b.tool
+        out[O.capture_loss] = b.capture
+        out[O.blow_efficiency] = b.tool / rev.motor_work
     out[O.blow_rate] = 60.0 / period
-    out[O.blow_efficiency] = b.tool / rev.motor_work
     out[O.cycle_period] = period
     out[O.impact_speed] = abs(u31m * w_minus) * m.linkage.l3
     out[O.restitution_kinematic] = u31p / u31m
     out[O.restitution_mismatch] = u31p / u31m + r
     out[O.reduced_inertia_before], out[O.reduced_inertia_after] = nd.j_before, nd.j_after
-    out[O.energy_balance_residual] = (rev.motor_work + rev.load_work - b.loss) / b.loss
+    # gravity and the load are conservative: their work over the closed cycle is 0, so
+    # the motor's work pays the blow's loss; the integrated load work is left out (the
+    # revolution's steps keep W_motor + W_load = T_end - T_start exactly: with it the
+    # balance holds whatever the integration error)
+    out[O.energy_balance_residual] = (rev.motor_work - b.loss) / b.loss
     if settings.angles.shape[0]:
         cycle_profiles(w_plus, nd, m, core, settings.angles, prof)
     if settings.peaks:

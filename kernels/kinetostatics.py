@@ -76,7 +76,37 @@ def _rules(given: dict) -> str | None:
     return None
 
 
+#: the short label a chart shows of each parameter, output and profile (Quantity.label)
+LABELS = {
+    "l0": "base $l_0$", "l1": "crank $l_1$", "l2": "coupler $l_2$", "l3": "rocker $l_3$",
+    "m1": "crank mass $m_1$", "m2": "coupler mass $m_2$", "m3": "rocker mass $m_3$",
+    "s1": "crank centroid $s_1$", "s2": "coupler centroid $s_2$", "s3": "rocker centroid $s_3$",
+    "q1": "crank offset $q_1$", "q2": "coupler offset $q_2$", "q3": "rocker offset $q_3$",
+    "J1": "crank inertia $I_{S1}$", "J2": "coupler inertia $I_{S2}$",
+    "J3": "rocker inertia $I_{S3}$", "omega1": r"crank speed $\omega_1$",
+    "epsilon1": r"crank acceleration $\varepsilon_1$", "tilt": r"tilt $\theta$",
+    "g": "gravity $g$", "sigma": r"branch $\sigma$", "external_force": "load across rocker",
+    "external_force_normal": "load along rocker", "external_force_arm": "load arm",
+    "external_moment": "load couple", "base_motion": "base motion",
+    "base_omega": r"base speed $\Omega_b$", "base_epsilon": "base acceleration $E_b$",
+    "base_amplitude": "base swing $A_b$", "base_frequency_ratio": r"base frequency $\nu$",
+    "base_phase": r"base phase $\varphi_b$", "crank_pivot_x": "crank pivot $x_A$",
+    "crank_pivot_y": "crank pivot $y_A$",
+    "force_peak_A": r"peak $|F_{14}|$ at A", "force_peak_B": r"peak $|F_{21}|$ at B",
+    "force_peak_C": r"peak $|F_{32}|$ at C", "force_peak_D": r"peak $|F_{34}|$ at D",
+    "balancing_moment_peak": r"peak $|M_b|$", "balancing_moment_rms": r"RMS $M_b$",
+    "cycle_work": "cycle work", "special_crank_angle": r"node angle $\varphi_1^*$",
+    "assembly_branch": r"branch $\sigma$",
+    "F21_n": r"$F_{21}$ along coupler", "F21_t": r"$F_{21}$ across coupler",
+    "F34_n": r"$F_{34}$ along rocker", "F34_t": r"$F_{34}$ across rocker",
+    "F32_n": r"$F_{32}$ along rocker", "F32_t": r"$F_{32}$ across rocker",
+    "F14_n": r"$F_{14}$ along crank", "F14_t": r"$F_{14}$ across crank",
+    "balancing_moment": "balancing moment $M_b$", "crank_angle": r"crank angle $\varphi_1$",
+}
+
+
 DECLARATION = Mechanism(
+    labels=LABELS,
     name="linkage_forces",
     title="Kinetostatics of the impact four-bar and GUIM-1's additional rocker",
     summary="Assur-dyad vector route for the reactions, balancing moment by virtual work, "

@@ -56,7 +56,28 @@ def _rules(given: dict) -> str | None:
     return None
 
 
+#: the short label a chart shows of each parameter and output (Quantity.label)
+LABELS = {
+    "model": "model", "k": "length ratio $k$", "xi": r"inertia ratio $\xi$",
+    "kappa": r"contact radius $\kappa$", "R": "restitution $R$",
+    "omega1": r"rotor speed $\omega_1$", "l2": "pendulum $l_2$", "striker_mass": "striker mass $m_s$",
+    "tool": "tool", "tool_window": "blade reach", "rotor_inertia_ratio": "rotor inertia $J_1/J_c$",
+    "motor_slope": "motor slope $s_m$", "idle_speed": r"idle speed $\Omega/\omega_1$",
+    "regime": "regime", "amplitude": "amplitude $A$", "frequency_ratio": "frequency ratio $n$",
+    "period": "period $T$", "impact_speed": "impact speed $V^*$",
+    "impact_interval": r"impact interval $\tau_1$", "impacts_to_converge": "impacts to converge",
+    "acceleration_peak": r"peak $|\psi''|$", "restitution_critical": r"critical $R_\mathrm{crit}$",
+    "rotor_speed_ratio": "rotor speed ratio", "n_steps": "steps", "n_rejected": "rejected steps",
+    "n_events": "events", "method_used": "method", "multiplier_modulus": r"multiplier $|\mu|$",
+    "multiplier_angle": r"multiplier angle $\arg\mu$", "stability_margin": r"stability margin $1-|\mu|$",
+    "impact_speed_min_ratio": "slowest/fastest impact", "edge_margin": "edge margin",
+    "attractor_count": "attractors", "basin_fraction": "basin fraction",
+    "error_estimate": "error estimate", "blow_energy": "blow energy $E$", "blow_rate": "blow rate",
+}
+
+
 DECLARATION = Mechanism(
+    labels=LABELS,
     name="rotary_pendulum",
     title="Rotary-pendulum impact mechanism: steady impact regime",
     summary="closed form (auto): first integral of the paper's equation, amplitude by Newton, "

@@ -29,7 +29,29 @@ from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quan
 from kernels.extrema import cell_midpoints, clustered_points, peak_search
 from kernels.fourbar import CHANGE_POINT_B, crank_turns_fully, vector_kinematics
 
+#: the short label a chart shows of each parameter, output and profile (Quantity.label)
+LABELS = {
+    "lambda2": r"stage 1 rod $\lambda_2$", "lambda3": r"stage 1 crank $\lambda_3$",
+    "mu4": r"stage 2 rod $\mu_4$", "mu5": r"stage 2 rocker $\mu_5$",
+    "beta": r"phase $\beta$", "delta": r"arm offset $\delta$", "direction": "direction",
+    "omega1": r"crank speed $\omega_1$", "crank_length": "crank $l_1$",
+    "rocker_inertia": "rocker inertia $J_5$", "gamma1": r"stage 1 node $\gamma_1$",
+    "gamma2": r"stage 2 node $\gamma_2$", "restitution_kinematic": "kinematic restitution $R_k$",
+    "transfer_stage1_low": r"stage 1 $u_{31}$ low", "transfer_stage1_high": r"stage 1 $u_{31}$ high",
+    "transfer_impact_1": r"$u_{51}$ at impact 1", "transfer_impact_2": r"$u_{51}$ at impact 2",
+    "transfer_stage1_impact_1": r"$u_{31}$ at impact 1",
+    "transfer_stage1_impact_2": r"$u_{31}$ at impact 2",
+    "impact_crank_angle_1": r"impact 1 at $\varphi_1$", "impact_crank_angle_2": r"impact 2 at $\varphi_1$",
+    "impact_speed_1": "impact speed 1", "impact_speed_2": "impact speed 2",
+    "transfer_peak": r"peak $|u_{51}|$", "transfer2_peak": r"peak $|u'_{51}|$",
+    "assembly_branch_stage2": r"stage 2 branch $\sigma_2$",
+    "blow_energy_1": "blow energy 1", "blow_energy_2": "blow energy 2", "blow_rate": "blow rate",
+    "rocker_angle": r"rocker angle $\varphi_5$", "crank_angle": r"crank angle $\varphi_1$",
+}
+
+
 DECLARATION = Mechanism(
+    labels=LABELS,
     name="six_link",
     title="Six-link impact mechanism with alternating branch switching",
     summary="stage 1 on the smooth path through its node (branch alternation rule), stage 2 "

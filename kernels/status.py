@@ -31,6 +31,8 @@ CODES = {
     "singular_inertia": 21,  # the reduced inertia vanishes on the cycle (no crank inertia)
     "too_slow": 22,  # a revolution takes too long to be a working machine
     "no_convergence": 23,  # no periodic steady state within the revolutions allowed
+    "gains_energy": 24,  # the blow's law creates energy (the kinematic law): no steady state
+    "unreachable_speed": 25,  # the motor cannot hold the crank speed asked of it
 }
 #: the meaning of each code
 MEANINGS = {code: name for name, code in CODES.items()}

@@ -42,11 +42,15 @@ SOURCE_PREFIX = "source_"
 @dataclass(frozen=True)
 class Mapping:
     """How one mechanism's designs set another's parameters: {target parameter:
-    expression over the source's variables}, and a condition every design must meet."""
+    expression over the source's variables}, and a condition every design must meet.
+    ``optional``: entries that apply where the source has every variable they name (an
+    input the source may not have been given); where it does not, the target keeps its own
+    value, and the run says so."""
 
     columns: dict
     requires: str | None = None
     why: str = ""
+    optional: dict = field(default_factory=dict)
 
 
 #: the declared mappings: (source mechanism, target mechanism) -> Mapping
@@ -56,8 +60,13 @@ MAPPINGS = {
          "l2": "lambda2 * crank_length", "l3": "lambda3 * crank_length",
          "omega1": "omega1"}),
     ("crank_rocker", "impact_machine"): Mapping(
+        # the linkage, the material it was synthesised for and the crank speed it was
+        # designed at (the machine's motor is sized for it: its idle speed solved); the
+        # rocker's inertia about D where the source has one (all of it as J3, no mass)
         {"type": '"general"', "lambda0": "lambda0", "lambda2": "lambda2",
-         "lambda3": "lambda3", "crank_length": "crank_length"}),
+         "lambda3": "lambda3", "crank_length": "crank_length", "R": "R",
+         "omega1": "abs(omega1)"},
+        optional={"J3": "rocker_inertia", "m3": "0 * rocker_inertia"}),
     ("crank_rocker", "six_link"): Mapping(
         {"mu4": "lambda2", "mu5": "lambda3"}, requires='type == "b"',
         why="six_link's second stage is a type b four-bar (largest rocker): mu4 = lambda2, "
@@ -164,12 +173,24 @@ def _designs(ds, table: dict, mech, path: Path) -> Designs:
     if declared is None and not table["map"]:
         raise UserError(f"grid.from.map: no declared mapping from {source} to {mech.name}; "
                         "give map = {PARAMETER = \"EXPRESSION over the source's variables\"}")
-    columns = {**(declared.columns if declared else {}), **table["map"]}
+    ds = _with_fixed(ds)
+    notes = []
+    optional = {}
+    for name, expression in (declared.optional if declared else {}).items():
+        if name in table["map"]:
+            continue
+        missing = sorted(_names_in(expression) - set(map(str, ds.variables)))
+        if missing:
+            q = known[name]
+            notes.append(f"grid.from: the source has no {', '.join(missing)}: {name} keeps "
+                         f"the target's {q.default!r} {q.units}".rstrip())
+        else:
+            optional[name] = expression
+    columns = {**(declared.columns if declared else {}), **optional, **table["map"]}
     if not columns:
         raise UserError(f"grid.from.map: the source's designs set no parameter of "
                         f"{mech.name}; give map = {{PARAMETER = \"EXPRESSION\"}}")
     shape = ds["status"].shape
-    ds = _with_fixed(ds)
     mask = np.asarray(usable_mask(ds).transpose(*dims).values)
     if "requirements" in ds.variables:
         mask &= np.asarray(ds["requirements"].transpose(*dims).values) == 0
@@ -228,7 +249,17 @@ def _designs(ds, table: dict, mech, path: Path) -> Designs:
     coordinates[SOURCE_PREFIX + "index"] = (points.astype(np.int64), {
         "units": "1", "long_name": "flat (C-order) index of the design in the source's grid "
                                    "(a front's: its place on the front)"})
-    return Designs(codes, coordinates, record, provenance)
+    return Designs(codes, coordinates, record, provenance, tuple(notes))
+
+
+def _names_in(expression: str) -> set[str]:
+    """The variable names an expression of the query language reads."""
+    from sweep import selection
+
+    tree = selection.parse(expression)
+    called = {id(node.func) for node in ast.walk(tree) if isinstance(node, ast.Call)}
+    return {node.id for node in ast.walk(tree)
+            if isinstance(node, ast.Name) and id(node) not in called}
 
 
 def _with_fixed(ds):

@@ -1,38 +1,43 @@
-"""Design charts from an atlas: matplotlib PNG with units on the axes and colour bar.
+"""Design charts from an atlas: a matplotlib Figure a designer reads at a glance.
 
-A numeric output is a colour map with contour lines and the output's marked levels (K = 1);
-a flag output (``regime``, ``status``) and a count that takes few values (``attractor_count``)
-are drawn as categories with their meanings in a legend.
-Cells without a design value are not left white: they are drawn in greys, one per status,
-named in the legend. Angles are drawn in degrees unless asked otherwise (a rotor angle of
-many turns, in turns); the atlas stays in radians. Figures are built without pyplot, so
-that a notebook's backend and a thread's charts do not interfere.
+Every axis, colour bar and legend shows a variable's short label with its units
+(``blow energy $E$ [J]``, sweep/labels.py), and the title says what is drawn: the colour
+over the two axes, at the values held fixed. A numeric output is a colour map with
+labelled contour lines and the output's marked levels (K = 1): a signed one on a diverging
+map centred on 0 (sweep/palettes.py). A flag output (``regime``, ``status``,
+``requirements``) and a count that takes few values are drawn as categories with their
+meanings in a legend: ``requirements`` met in blue, each failing limit in its own warm
+shade. Cells without a design value are not left white: they are drawn in greys, one per
+status, named in the legend. Figures are built without pyplot (a notebook's backend and a
+thread's charts do not interfere), or drawn into a caller's axes (``ax``).
+
+``design_figure`` goes in named steps: the input checked (``_check``), the panels
+(``_panels``), the colours of the values (``_colouring``) and of the cells without one
+(``_blanks``), each panel drawn (``_draw_panel``: cells, boundaries, overlay, contours,
+marks, axes), then the key (``_key``: colour bar or legend) and the title (``_title``).
 """
 
 from __future__ import annotations
 
 import datetime as _dt
-import textwrap
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 import xarray as xr
 
+from sweep import labels, palettes
 from sweep.errors import UserError
 from sweep.selection import evaluate, flag_names, take_at
 
 #: panels per row of a chart with one panel per value of another axis
 PANELS_PER_ROW = 3
-#: the categories' colours (a qualitative map), and the greys of cells without a value
-CATEGORY_COLOURS = ("#4e79a7", "#f28e2b", "#59a14f", "#e15759", "#b07aa1", "#edc948",
-                    "#76b7b2", "#ff9da7", "#9c755f", "#bab0ac")
-UNDETERMINED_COLOUR = "#7f7f7f"  # a flag's negative code: no category was decided
 #: crossings this close (relative) on one edge are drawn as one
 THIN_BAND = 1e-6
-BLANK_GREYS = ("0.86", "0.72", "0.58", "0.93", "0.65", "0.79")
 #: a count with at most this many distinct values is drawn as categories
 MAX_COUNT_CATEGORIES = 12
+#: contour levels drawn on a colour map, at most (each labelled)
+CONTOUR_LEVELS = 5
 
 
 class Drawn(NamedTuple):
@@ -51,31 +56,7 @@ class Drawn(NamedTuple):
     yticks: list[str]
     colour_bar: bool
     legend_colours: list[str]
-
-
-def category_colour(code: int, codes) -> str:
-    """A category's colour, the same in every atlas of a mechanism whatever else it holds:
-    by the meaning's place among the flag's codes >= 0; a negative code (undetermined)
-    grey. Ranked among the codes present, period_1 was orange in one blade chart and blue
-    in the next."""
-    if code < 0:
-        return UNDETERMINED_COLOUR
-    decided = sorted(c for c in codes if c >= 0)
-    return CATEGORY_COLOURS[decided.index(code) % len(CATEGORY_COLOURS)]
-
-
-def _declared(ds: xr.Dataset, name: str):
-    """The declaration of an atlas variable's output, or None (a coordinate, status, or an
-    atlas of an unknown mechanism)."""
-    from sweep import registry
-
-    mech = ds.attrs.get("mechanism", "")
-    if mech not in registry.names():
-        return None
-    try:
-        return registry.get(mech).declaration.output(name)
-    except KeyError:
-        return None
+    title: str
 
 
 def _undetermined_code(var: xr.DataArray):
@@ -86,49 +67,10 @@ def _undetermined_code(var: xr.DataArray):
     return int(np.atleast_1d(var.attrs["flag_values"])[meanings.index("undetermined")])
 
 
-def _chart_units(ds: xr.Dataset, name: str) -> tuple[str, float] | None:
-    """(units, factor) a chart shows a variable in instead of its own, if declared."""
-    output = _declared(ds, name)
-    return output.chart_units if output is not None else None
-
-
-def _units(ds: xr.Dataset, name: str, degrees: bool) -> str:
-    units = ds[name].attrs.get("units", "")
-    other = _chart_units(ds, name)
-    if other is not None:
-        return other[0]
-    if degrees and units == "rad":
-        return "deg"
-    return "-" if units in ("1", "") else units
-
-
-def _label(ds: xr.Dataset, name: str, degrees: bool = False, width: int = 48) -> str:
-    """An axis label: the name, its units and its long name wrapped at ``width``
-    characters (narrower along a vertical axis, which is shorter than the text)."""
-    long_name = textwrap.fill(ds[name].attrs.get("long_name", name), width)
-    return f"{name} [{_units(ds, name, degrees)}]\n{long_name}"
-
-
-#: the wrap of a label along a vertical axis: a 4-inch axis holds about 36 characters
-VERTICAL_LABEL_WIDTH = 32
-
-
-def _shown(var: xr.DataArray, degrees: bool, ds: xr.Dataset | None = None) -> np.ndarray:
-    """A variable's values as drawn: in its declared chart units (a rotor angle in turns),
-    radians in degrees when asked."""
-    values = np.asarray(var.values)
-    other = _chart_units(ds, str(var.name)) if ds is not None else None
-    if other is not None:
-        return values * other[1]
-    if degrees and var.attrs.get("units") == "rad":
-        return np.degrees(values)
-    return values
-
-
 def _is_count(ds: xr.Dataset, name: str) -> bool:
     """A declared count whose finite values are few enough to read as categories."""
-    output = _declared(ds, name)
-    if output is None or not output.count:
+    output = labels.declared(ds, name)
+    if output is None or not getattr(output, "count", False):
         return False
     values = np.asarray(ds[name].values, dtype=float)
     distinct = np.unique(values[np.isfinite(values)])
@@ -167,19 +109,8 @@ def _number(value: float) -> str:
 
 def _marks(ds: xr.Dataset, name: str) -> tuple:
     """The declared (value, meaning) levels of an output (from the mechanism's declaration)."""
-    output = _declared(ds, name)
-    return output.marks if output is not None else ()
-
-
-def _panel_title(ds: xr.Dataset, dim: str, k: int, degrees: bool) -> str:
-    value = ds[dim].values[k]
-    if isinstance(value, bytes):
-        value = value.decode()
-    if isinstance(value, str):
-        return f"{dim} = {value}"
-    units = _units(ds, dim, degrees)
-    shown = np.degrees(value) if units == "deg" else value
-    return f"{dim} = {shown:.6g}" + ("" if units == "-" else f" {units}")
+    output = labels.declared(ds, name)
+    return getattr(output, "marks", ()) if output is not None else ()
 
 
 def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
@@ -192,26 +123,83 @@ def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
     return drawn(fig, out)
 
 
+class Colouring(NamedTuple):
+    """How the colour variable is drawn: its values (a category's index for categories)
+    where a design has one, NaN elsewhere; whether each cell has one; the map and norm;
+    categories or a scale; the categories' (colour, text) for the legend; the contour
+    levels of a scale and its marked levels."""
+
+    shown: xr.DataArray
+    has_value: np.ndarray
+    cmap: object
+    norm: object
+    categorical: bool
+    legend: list
+    levels: np.ndarray
+    marks: tuple
+
+
+class Blanks(NamedTuple):
+    """The cells without a value: each one's index among the statuses drawn (NaN where it
+    has a value), their grey map and norm, and the legend's (grey, text)."""
+
+    index: xr.DataArray
+    cmap: object
+    norm: object
+    legend: list
+
+
 def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = True,
                   degrees: bool = True, at: dict | None = None,
-                  boundaries: xr.Dataset | None = None, overlay: str | None = None):
+                  boundaries: xr.Dataset | None = None, overlay: str | None = None,
+                  ax=None, cmap: str | None = None, figsize: tuple | None = None):
     """Chart of ``color`` over (x, y), one panel per value of the other grid axis of more than
     one value (at most three panels a row), as a matplotlib Figure. ``ok_only``: cells whose
     status has no design values are drawn as their status, not as a value; ``degrees``:
     angles in degrees; ``at``: take other grid axes at one value ({axis: (value, "" or
     "deg")}); ``boundaries``: the refined crossings of ``sweep boundaries``, drawn as lines;
     ``overlay``: a numeric output drawn as labelled contour lines over the colours (the
-    stability margin over a regime map), where it has a design value."""
-    import matplotlib
-    import matplotlib.colors as mcolors
-    import matplotlib.ticker as ticker
-    from matplotlib.collections import LineCollection
-    from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
+    stability margin over a regime map), where it has a design value. ``ax``: draw into
+    these matplotlib axes (one panel) instead of a new figure; ``cmap``: a colour map for a
+    numeric output; ``figsize``: the new figure's size in inches."""
+    _check(ds, x, y, color, at, overlay, boundaries)
+    grid_dims, grid_shape = list(ds["status"].dims), ds["status"].shape
+    ds, chosen = take_at(ds, at, grid=True)
+    facet, panels = _panels(ds, grid_dims, x, y, ax)
+    if ax is None:
+        from matplotlib.figure import Figure
 
-    from sweep.metadata import usable_mask
+        n_cols = min(len(panels), PANELS_PER_ROW)
+        n_rows = -(-len(panels) // n_cols)
+        fig = Figure(figsize=figsize or (4.6 * n_cols + 1.8, 4.2 * n_rows + 1.2),
+                     layout="constrained")
+        axes = fig.subplots(n_rows, n_cols, squeeze=False)
+    else:
+        fig, axes, n_rows, n_cols = ax.figure, np.array([[ax]]), 1, 1
+    colouring = _colouring(ds, color, ok_only, degrees, cmap)
+    blanks = _blanks(ds, color, colouring.has_value)
+    layer = _overlay(ds, overlay, ok_only, degrees) if overlay is not None else None
+    mesh = None
+    for panel_ax, k in zip(axes.ravel(), panels):
+        pick = {} if k is None else {facet: k}
+        mesh = _draw_panel(panel_ax, ds, x, y, pick, colouring, blanks, layer, boundaries,
+                           grid_dims, grid_shape, degrees)
+        if k is not None:
+            panel_ax.set_title(labels.value_text(ds, facet, ds[facet].values[k], degrees),
+                               fontsize=9)
+    for unused in axes.ravel()[len(panels):]:
+        unused.set_visible(False)
+    _key(fig, axes, ds, color, overlay, boundaries, colouring, blanks, mesh, degrees,
+         own=ax is None)
+    _title(fig, axes, ds, x, y, color, chosen, grid_dims, facet, degrees, own=ax is None)
+    _thin_labels(fig)
+    fig.layout_shape = (n_rows, n_cols)  # read back by ``drawn``
+    fig.colour_bar = not colouring.categorical
+    return fig
 
+
+def _check(ds, x, y, color, at, overlay, boundaries) -> None:
+    """The chart's input, each fault one line naming the argument."""
     for axis, name in (("x", x), ("y", y), ("color", color)):
         if name in ("requirements", "requirement_margin") and name not in ds.variables:
             raise UserError(f"{axis}: this atlas has no requirements; give them with "
@@ -244,26 +232,38 @@ def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = Tr
                             "allowed: " + ", ".join(numeric))
     if boundaries is not None:
         check_boundaries(ds, boundaries)
-    grid_shape = ds["status"].shape
-    ds, chosen = take_at(ds, at, grid=True)
+
+
+def _panels(ds, grid_dims, x, y, ax) -> tuple:
+    """(the axis panelled over, or None; the panels: its indices, or [None])."""
     facet_dims = [d for d in grid_dims if d not in (x, y) and ds.sizes[d] > 1]
     if len(facet_dims) > 1:
         raise UserError(f"chart: more than one other axis to panel over ({', '.join(facet_dims)});"
                         " take one at a value with --at AXIS=VALUE")
-    panels = [None] if not facet_dims else list(range(ds.sizes[facet_dims[0]]))
-    n_cols = min(len(panels), PANELS_PER_ROW)
-    n_rows = -(-len(panels) // n_cols)
-    fig = Figure(figsize=(4.6 * n_cols + 1.8, 4.2 * n_rows + 0.9), layout="constrained")
-    axes = fig.subplots(n_rows, n_cols, squeeze=False)
+    if facet_dims and ax is not None:
+        raise UserError(f"ax: one axes holds one panel; take {facet_dims[0]} at a value "
+                        "(at=) or let the chart make its own figure")
+    if not facet_dims:
+        return None, [None]
+    return facet_dims[0], list(range(ds.sizes[facet_dims[0]]))
+
+
+def _colouring(ds, color, ok_only, degrees, cmap_name) -> Colouring:
+    """The colours of the colour variable's values (see Colouring)."""
+    import matplotlib
+    import matplotlib.colors as mcolors
+    import matplotlib.ticker as ticker
+
+    from sweep.metadata import usable_mask
+
     var = ds[color]
-    status = ds["status"]
-    status_names = flag_names(status)
     is_flag = "flag_meanings" in var.attrs
     is_count = not is_flag and _is_count(ds, color)
-    declared = _declared(ds, color)
+    declared = labels.declared(ds, color)
     # status, and an output that exists at every status (a regime, a threshold), is drawn
     # wherever it has a value; a design value only where the status is usable
-    everywhere = color == "status" or (declared is not None and declared.at_every_status)
+    everywhere = color in ("status", "requirements") or (
+        declared is not None and getattr(declared, "at_every_status", False))
     usable = (usable_mask(ds).values if ok_only and not everywhere
               else np.ones(var.shape, bool))
     if is_flag or is_count:
@@ -272,14 +272,15 @@ def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = Tr
             has_value = usable & (np.asarray(var.values) != _undetermined_code(var))
             present = sorted(int(c) for c in np.unique(np.asarray(var.values)[has_value])
                              if int(c) in names)
-            colour_of = {c: category_colour(c, names) for c in present}
+            colour_of = palettes.flag_colours(color, names)
+            text = {c: names[c].replace("_", " ") for c in present}
         else:  # a count: each value its own category, in the order of the values
             values = np.asarray(var.values, dtype=float)
             has_value = usable & np.isfinite(values)
             present = sorted(int(v) for v in np.unique(values[has_value]))
-            names = {c: f"{c:d}" for c in present}
-            colour_of = {c: CATEGORY_COLOURS[i % len(CATEGORY_COLOURS)]
+            colour_of = {c: palettes.CATEGORY_COLOURS[i % len(palettes.CATEGORY_COLOURS)]
                          for i, c in enumerate(present)}
+            text = {c: f"{c:d}" for c in present}
         index = {code: i for i, code in enumerate(present)}
         cmap = mcolors.ListedColormap([colour_of[c] for c in present] or ["1.0"])
         norm = mcolors.BoundaryNorm(np.arange(max(len(present), 1) + 1) - 0.5,
@@ -288,140 +289,241 @@ def design_figure(ds: xr.Dataset, x: str, y: str, color: str, ok_only: bool = Tr
         shown = np.full(codes.shape, np.nan)
         for code, i in index.items():
             shown[codes == code] = i
+        return Colouring(xr.DataArray(shown, dims=var.dims), has_value, cmap, norm, True,
+                         [(colour_of[c], text[c]) for c in present], np.array([]), ())
+    shown = labels.shown_values(var, degrees, ds).astype(float)
+    has_value = usable & np.isfinite(shown)
+    shown = np.where(has_value, shown, np.nan)
+    finite = shown[has_value]
+    vmin, vmax = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
+    if vmin == vmax:
+        vmin, vmax = vmin - 0.5 * max(abs(vmin), 1.0), vmax + 0.5 * max(abs(vmax), 1.0)
+    # values spanning decades (transfer ratios, speeds) read better on a log colour scale;
+    # a signed quantity on a diverging map centred on 0
+    log_colour = bool(finite.size) and vmin > 0 and vmax / vmin > 20
+    diverging = not log_colour and palettes.signed(finite)
+    if log_colour:
+        norm = mcolors.LogNorm(vmin=vmin, vmax=vmax)
+    elif diverging:
+        norm = mcolors.TwoSlopeNorm(vcenter=0.0, vmin=vmin, vmax=vmax)
     else:
-        shown = _shown(var, degrees, ds).astype(float)
-        has_value = usable & np.isfinite(shown)
-        shown = np.where(has_value, shown, np.nan)
-        finite = shown[has_value]
-        vmin, vmax = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
-        # values spanning decades (transfer ratios, speeds) read better on a log colour scale
-        log_colour = finite.size and vmin > 0 and vmax / vmin > 20
-        norm = (mcolors.LogNorm(vmin=vmin, vmax=vmax) if log_colour
-                else mcolors.Normalize(vmin=vmin, vmax=vmax))
-        cmap = matplotlib.colormaps["viridis"]
-        locator = (ticker.LogLocator(subs=(1.0, 2.0, 5.0)) if log_colour
-                   else ticker.MaxNLocator(6))
-        levels = locator.tick_values(vmin, vmax)
+        norm = mcolors.Normalize(vmin=vmin, vmax=vmax)
+    cmap = matplotlib.colormaps[cmap_name or (palettes.DIVERGING if diverging
+                                              else palettes.SEQUENTIAL)]
+    locator = (ticker.LogLocator(subs=(1.0,)) if log_colour
+               else ticker.MaxNLocator(CONTOUR_LEVELS))
+    levels = np.asarray(locator.tick_values(vmin, vmax))
+    levels = levels[(levels > vmin) & (levels < vmax)]
+    if log_colour and levels.size < 3:
+        levels = np.asarray(ticker.LogLocator(subs=(1.0, 3.0)).tick_values(vmin, vmax))
         levels = levels[(levels > vmin) & (levels < vmax)]
-        marks = _marks(ds, color)
-        levels = levels[~np.isin(levels, [value for value, _ in marks])]  # drawn as marks
-        labelled = (levels[np.isclose(np.log10(levels), np.round(np.log10(levels)))]
-                    if log_colour else levels[::2])
-    categorical = is_flag or is_count
-    shown = xr.DataArray(shown, dims=var.dims)
-    # cells without a value, drawn as their status (greys), each named in the legend
-    blank_codes = np.where(has_value, -1, status.transpose(*var.dims).values
-                           if set(var.dims) == set(status.dims) else -1)
-    blank_present = [int(c) for c in np.unique(blank_codes) if c >= 0]
-    grey_of = {c: BLANK_GREYS[i % len(BLANK_GREYS)] for i, c in enumerate(blank_present)}
-    blank_index = xr.DataArray(np.vectorize(lambda c: blank_present.index(int(c))
-                                            if c >= 0 else np.nan, otypes=[float])(blank_codes)
-                               if blank_present else np.full(var.shape, np.nan), dims=var.dims)
-    grey_map = mcolors.ListedColormap([grey_of[c] for c in blank_present] or ["1.0"])
-    grey_norm = mcolors.BoundaryNorm(np.arange(max(len(blank_present), 1) + 1) - 0.5,
-                                     max(len(blank_present), 1))
-    if categorical:
-        marks = ()
-    x_values, y_values = _shown(ds[x], degrees, ds), _shown(ds[y], degrees, ds)
-    if overlay is not None:
-        lay = _shown(ds[overlay], degrees, ds).astype(float)
-        lay = xr.DataArray(np.where(usable_mask(ds).values if ok_only else True, lay, np.nan),
-                           dims=ds[overlay].dims)
-        finite = lay.values[np.isfinite(lay.values)]
-        overlay_levels = (ticker.MaxNLocator(5).tick_values(finite.min(), finite.max())
-                          if finite.size else [])
-    mesh = None
-    for ax, k in zip(axes.ravel(), panels):
-        pick = {} if k is None else {facet_dims[0]: k}
-        val = shown.isel(pick) if pick else shown
-        blank = blank_index.isel(pick) if pick else blank_index
-        others = [d for d in val.dims if d not in (x, y)]
-        val, blank = val.squeeze(others, drop=True), blank.squeeze(others, drop=True)
-        grid = val.transpose(y, x).values
-        ax.pcolormesh(x_values, y_values, blank.transpose(y, x).values, cmap=grey_map,
-                      norm=grey_norm, shading="nearest")
-        mesh = ax.pcolormesh(x_values, y_values, grid, norm=norm, cmap=cmap,
-                             shading="nearest")
-        if boundaries is not None:
-            panel = {d: ds[d].values[pick.get(d, 0)] for d in grid_dims
-                     if d not in (x, y) and (d in pick or ds.sizes[d] == 1)}
-            segments = boundary_segments(boundaries, grid_dims, grid_shape, x, y, panel)
-            fx, fy = (float(_shown(xr.DataArray(1.0, name=n, attrs=ds[n].attrs),
-                                   degrees, ds)) for n in (x, y))
-            segments = [[(a * fx, b * fy) for a, b in seg] for seg in segments]
-            ax.add_collection(LineCollection(segments, colors="black", linewidths=1.3))
-        if overlay is not None:
-            lay_panel = lay.isel(pick) if pick else lay
-            lay_panel = lay_panel.squeeze([d for d in lay_panel.dims if d not in (x, y)],
-                                          drop=True).transpose(y, x).values
-            lay_panel = _without_jumps(lay_panel)
-            if np.isfinite(lay_panel).sum() > 4 and len(overlay_levels):
-                lines = ax.contour(x_values, y_values, lay_panel, levels=overlay_levels,
-                                   colors="black", linewidths=0.9, linestyles="-")
-                ax.clabel(lines, fontsize=7, fmt=_number, inline_spacing=2)
-        if not categorical and np.isfinite(grid).sum() > 4:
-            if len(levels):
-                lines = ax.contour(x_values, y_values, grid, levels=levels, norm=norm,
-                                   colors="white", linewidths=0.6)
-                # decades (log) or every other level labelled: labels do not pile up
-                ax.clabel(lines, labelled, fontsize=7, fmt=_number, inline_spacing=2)
-            for value, meaning in marks:
-                if np.nanmin(grid) < value < np.nanmax(grid):
-                    mark = ax.contour(x_values, y_values, grid, levels=[value],
-                                      colors="#d62728", linewidths=1.6, linestyles="--")
-                    ax.clabel(mark, fmt={value: meaning.split(":")[0]}, fontsize=8)
-        ax.set_xlabel(_label(ds, x, degrees))
-        ax.set_ylabel(_label(ds, y, degrees, VERTICAL_LABEL_WIDTH))
-        if k is not None:
-            ax.set_title(_panel_title(ds, facet_dims[0], k, degrees), fontsize=9)
-        for name, values, axis, scale in ((x, x_values, ax.xaxis, ax.set_xscale),
-                                          (y, y_values, ax.yaxis, ax.set_yscale)):
-            if name in ds.dims and _log_spaced(np.asarray(values)):
-                scale("log")
-                _plain_log_axis(axis)
-    for ax in axes.ravel()[len(panels):]:
-        ax.set_visible(False)
+    marks = _marks(ds, color)
+    levels = levels[~np.isin(levels, [value for value, _ in marks])]  # drawn as marks
+    return Colouring(xr.DataArray(shown, dims=var.dims), has_value, cmap, norm, False, [],
+                     levels, marks)
+
+
+def _blanks(ds, color, has_value) -> Blanks:
+    """The cells without a value, drawn as their status, each grey named in the legend."""
+    import matplotlib.colors as mcolors
+
+    var, status = ds[color], ds["status"]
+    status_names = flag_names(status)
+    codes = np.where(has_value, -1, status.transpose(*var.dims).values
+                     if set(var.dims) == set(status.dims) else -1)
+    present = [int(c) for c in np.unique(codes) if c >= 0]
+    grey_of = {c: palettes.BLANK_GREYS[i % len(palettes.BLANK_GREYS)]
+               for i, c in enumerate(present)}
+    index = (np.vectorize(lambda c: present.index(int(c)) if c >= 0 else np.nan,
+                          otypes=[float])(codes) if present else np.full(var.shape, np.nan))
+    cmap = mcolors.ListedColormap([grey_of[c] for c in present] or ["1.0"])
+    norm = mcolors.BoundaryNorm(np.arange(max(len(present), 1) + 1) - 0.5,
+                                max(len(present), 1))
+    legend = [(grey_of[c], f"no value: {status_names.get(c, c).replace('_', ' ')} "
+                           f"({int((codes == c).sum()):,})") for c in present]
+    return Blanks(xr.DataArray(index, dims=var.dims), cmap, norm, legend)
+
+
+def _overlay(ds, overlay, ok_only, degrees) -> tuple:
+    """(the overlay's values where they are design values, its contour levels)."""
+    import matplotlib.ticker as ticker
+
+    from sweep.metadata import usable_mask
+
+    lay = labels.shown_values(ds[overlay], degrees, ds).astype(float)
+    lay = xr.DataArray(np.where(usable_mask(ds).values if ok_only else True, lay, np.nan),
+                       dims=ds[overlay].dims)
+    finite = lay.values[np.isfinite(lay.values)]
+    levels = (ticker.MaxNLocator(CONTOUR_LEVELS).tick_values(finite.min(), finite.max())
+              if finite.size else [])
+    return lay, levels
+
+
+def _draw_panel(ax, ds, x, y, pick, colouring, blanks, layer, boundaries, grid_dims,
+                grid_shape, degrees):
+    """One panel: the greys of cells without a value, the colours, the refined
+    boundaries, the overlay's and the scale's labelled contour lines, the marked levels,
+    the axes' labels and scales. Returns the colour mesh."""
+    import matplotlib.colors as mcolors
+    from matplotlib.collections import LineCollection
+
+    x_values = labels.shown_values(ds[x], degrees, ds)
+    y_values = labels.shown_values(ds[y], degrees, ds)
+
+    def panel(array):
+        array = array.isel(pick) if pick else array
+        return array.squeeze([d for d in array.dims if d not in (x, y)],
+                             drop=True).transpose(y, x).values
+
+    grid = panel(colouring.shown)
+    ax.pcolormesh(x_values, y_values, panel(blanks.index), cmap=blanks.cmap, norm=blanks.norm,
+                  shading="nearest")
+    mesh = ax.pcolormesh(x_values, y_values, grid, norm=colouring.norm, cmap=colouring.cmap,
+                         shading="nearest")
+    if boundaries is not None:
+        fixed = {d: ds[d].values[pick.get(d, 0)] for d in grid_dims
+                 if d not in (x, y) and (d in pick or ds.sizes[d] == 1)}
+        segments = boundary_segments(boundaries, grid_dims, grid_shape, x, y, fixed)
+        fx, fy = (float(labels.shown_values(xr.DataArray(1.0, name=n, attrs=ds[n].attrs),
+                                            degrees, ds)) for n in (x, y))
+        segments = [[(a * fx, b * fy) for a, b in seg] for seg in segments]
+        ax.add_collection(LineCollection(segments, colors="black", linewidths=1.3))
+    if layer is not None:
+        values, levels = layer
+        values = _without_jumps(panel(values))
+        if np.isfinite(values).sum() > 4 and len(levels):
+            lines = ax.contour(x_values, y_values, values, levels=levels, colors="black",
+                               linewidths=0.9, linestyles="-")
+            _label_contours(ax, lines)
+    if not colouring.categorical and np.isfinite(grid).sum() > 4:
+        if len(colouring.levels):
+            # white over a sequential map's dark end, dark grey over a diverging map
+            # (whose middle is white); solid at negative levels too
+            diverging = isinstance(colouring.norm, mcolors.TwoSlopeNorm)
+            lines = ax.contour(x_values, y_values, grid, levels=colouring.levels,
+                               norm=colouring.norm, colors="0.25" if diverging else "white",
+                               linewidths=0.6, linestyles="solid")
+            _label_contours(ax, lines)
+        for value, meaning in colouring.marks:
+            if np.nanmin(grid) < value < np.nanmax(grid):
+                mark = ax.contour(x_values, y_values, grid, levels=[value],
+                                  colors="#D55E00", linewidths=1.6, linestyles="--")
+                ax.clabel(mark, fmt={value: meaning.split(":")[0]}, fontsize=8)
+    ax.set_xlabel(labels.axis_label(ds, x, degrees))
+    ax.set_ylabel(labels.axis_label(ds, y, degrees))
+    for name, values, axis, scale in ((x, x_values, ax.xaxis, ax.set_xscale),
+                                      (y, y_values, ax.yaxis, ax.set_yscale)):
+        if name in ds.dims and _log_spaced(np.asarray(values)):
+            scale("log")
+            _plain_log_axis(axis)
+    return mesh
+
+
+def _label_contours(ax, lines) -> None:
+    """One label on every level drawn, at the middle (by length) of its longest line: away
+    from the axes' edges, where matplotlib's own placement often puts them; those that
+    collide are thinned once the figure is laid out (``_thin_labels``)."""
+    places, levels = [], []
+    for level, segments in zip(lines.levels, lines.allsegs):
+        if not segments:
+            continue
+        longest = max(segments, key=lambda seg: np.sum(np.hypot(*np.diff(seg, axis=0).T)))
+        if len(longest) < 2:
+            continue
+        length = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(longest, axis=0).T))))
+        middle = int(np.searchsorted(length, 0.5 * length[-1]))
+        places.append(tuple(longest[min(middle, len(longest) - 1)]))
+        levels.append(level)
+    if not places:
+        return
+    texts = ax.clabel(lines, levels, fontsize=7, fmt=_number, inline_spacing=2,
+                      manual=places)
+    ax.contour_labels = getattr(ax, "contour_labels", []) + list(texts)
+
+
+def _thin_labels(fig) -> None:
+    """Drop a contour label that overlaps one kept (or an axes' edge), unless it is its
+    level's last one: every level drawn keeps a label, none sits on another."""
+    fig.draw_without_rendering()
+    renderer = fig._get_renderer()
+    for ax in fig.axes:
+        texts = getattr(ax, "contour_labels", [])
+        left: dict[str, int] = {}
+        for t in texts:
+            left[t.get_text()] = left.get(t.get_text(), 0) + 1
+        frame = ax.get_window_extent(renderer)
+        kept = []
+        for t in texts:
+            box = t.get_window_extent(renderer)
+            inside = (frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0
+                      and box.y1 <= frame.y1)
+            if (not inside or any(box.overlaps(other) for other in kept)) and \
+                    left[t.get_text()] > 1:
+                left[t.get_text()] -= 1
+                t.remove()
+                continue
+            kept.append(box)
+
+
+def _key(fig, axes, ds, color, overlay, boundaries, colouring, blanks, mesh, degrees,
+         own: bool) -> None:
+    """The colour bar of a scale (with its marked levels), and the legend: categories, the
+    overlay's and boundaries' lines, the greys of cells without a value."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
     handles = []
     if overlay is not None:
         handles.append(Line2D([], [], color="black", lw=0.9,
-                              label=f"{_label(ds, overlay, degrees)} (contour lines)"))
+                              label=f"{labels.axis_label(ds, overlay, degrees)} (lines)"))
     if boundaries is not None:
         handles.append(Line2D([], [], color="black", lw=1.3, label=(
-            f"boundaries of {boundaries.attrs.get('variable')}, refined to "
+            f"{labels.label(ds, str(boundaries.attrs.get('variable')))} boundaries, to "
             f"{float(boundaries.attrs.get('tolerance', np.nan)):g}")))
-    if categorical:
-        handles += [Patch(color=colour_of[c], label=names[c]) for c in present]
+    if colouring.categorical:
+        handles += [Patch(color=colour, label=text) for colour, text in colouring.legend]
     else:
-        bar = fig.colorbar(mesh, ax=axes.ravel().tolist(), shrink=0.9)
-        bar.set_label(_label(ds, color, degrees, VERTICAL_LABEL_WIDTH))
-        if isinstance(norm, mcolors.LogNorm):
+        bar = fig.colorbar(mesh, ax=axes.ravel().tolist() if own else axes[0, 0],
+                           shrink=0.9)
+        bar.set_label(labels.axis_label(ds, color, degrees))
+        import matplotlib.colors as mcolors
+
+        if isinstance(colouring.norm, mcolors.LogNorm):
             _plain_log_axis(bar.ax.yaxis)
-        for value, meaning in marks:
-            if norm.vmin < value < norm.vmax:
-                bar.ax.axhline(value, color="#d62728", lw=1.6, ls="--")
-                handles.append(Line2D([], [], color="#d62728", lw=1.6, ls="--",
+        for value, meaning in colouring.marks:
+            if colouring.norm.vmin < value < colouring.norm.vmax:
+                bar.ax.axhline(value, color="#D55E00", lw=1.6, ls="--")
+                handles.append(Line2D([], [], color="#D55E00", lw=1.6, ls="--",
                                       label=meaning))
-    counts = {c: int((blank_codes == c).sum()) for c in blank_present}
-    handles += [Patch(color=grey_of[c], label=f"no {color} value: {status_names.get(c, c)} "
-                                             f"({counts[c]:,} points)")
-                for c in blank_present]
-    if handles:
+    handles += [Patch(color=grey, label=text) for grey, text in blanks.legend]
+    if not handles:
+        return
+    if own:
         # as many columns as the figure's width holds of the longest label (8 pt text)
         longest = max(len(h.get_label()) for h in handles)
         fits = int(fig.get_figwidth() / (0.075 * longest + 0.6))
         fig.legend(handles=handles, loc="outside lower center", fontsize=8,
-                   ncols=max(1, min(len(handles), 3, fits)),
-                   title=(f"{color}: {var.attrs.get('long_name')}"
-                                                      if categorical else None),
-                   title_fontsize=8)
+                   ncols=max(1, min(len(handles), 4, fits)), frameon=False)
+    else:
+        axes[0, 0].legend(handles=handles, fontsize=7)
+
+
+def _title(fig, axes, ds, x, y, color, chosen, grid_dims, facet, degrees, own) -> None:
+    """What is drawn: the colour over the two axes, at the values held fixed (the axes taken
+    at a value and those of one value), one line of the atlas's title and the code's
+    version under it."""
+    held = [labels.value_text(ds, d, ds[d].values[0], degrees) for d in grid_dims
+            if d not in (x, y, facet) and d in ds.dims and ds.sizes[d] == 1]
+    what = f"{labels.label(ds, color)} over {labels.label(ds, x)} and {labels.label(ds, y)}"
+    if held:
+        what += ", at " + ", ".join(held)
+    if not own:
+        axes[0, 0].set_title(labels.wrapped(what, 60), fontsize=9)
+        return
+    width = int(fig.get_figwidth() * 12)  # characters a line of 9 pt text holds
     caption = ds.attrs.get("title", "")
-    if chosen:
-        caption += f"\nat {chosen}"
-    caption += f"\n{made_by()}"
-    fig.suptitle(caption, fontsize=8)
-    fig.layout_shape = (n_rows, n_cols)  # read back by ``drawn``
-    fig.colour_bar = not categorical
-    return fig
+    fig.suptitle(labels.wrapped(what, width) + "\n" + labels.wrapped(
+        f"{caption} · {made_by()}" if caption else made_by(), width), fontsize=9)
 
 
 def drawn(fig, out: Path) -> Drawn:
@@ -433,15 +535,16 @@ def drawn(fig, out: Path) -> Drawn:
     used = [ax for ax in fig.axes if ax.get_visible() and ax.get_label() != "<colorbar>"]
     handles = fig.legends[0].legend_handles if fig.legends else []
     n_rows, n_cols = fig.layout_shape
-    labels = [t.get_text() for t in fig.legends[0].get_texts()] if fig.legends else []
-    return Drawn(out, labels, [ax.get_title() for ax in used],
+    texts = [t.get_text() for t in fig.legends[0].get_texts()] if fig.legends else []
+    return Drawn(out, texts, [ax.get_title() for ax in used],
                  n_rows, n_cols, used[0].get_xlabel(), used[0].get_ylabel(),
                  used[0].get_xscale(), used[0].get_yscale(),
                  [t.get_text() for t in used[0].get_xticklabels() if t.get_text()],
                  [t.get_text() for t in used[0].get_yticklabels() if t.get_text()],
                  fig.colour_bar,
                  [mcolors.to_hex(h.get_facecolor() if isinstance(h, Patch) else h.get_color())
-                  for h in handles])
+                  for h in handles],
+                 fig.get_suptitle())
 
 
 def check_boundaries(ds: xr.Dataset, bounds: xr.Dataset) -> None:
@@ -584,24 +687,26 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
     point = ds.isel(at)
     by_unit: dict[str, list[str]] = {}
     for name in names:
-        by_unit.setdefault(_units(point, name, degrees), []).append(name)
-    fig = Figure(figsize=(8, 2.2 + 2.6 * len(by_unit)), layout="constrained")
+        by_unit.setdefault(labels.units(point, name, degrees), []).append(name)
+    fig = Figure(figsize=(8, 2.0 + 2.6 * len(by_unit)), layout="constrained")
     axes = fig.subplots(len(by_unit), 1, sharex=True, squeeze=False)[:, 0]
     angle = point[pdim].attrs.get("units") == "rad"
-    x = _shown(point[pdim], degrees)
+    x = labels.shown_values(point[pdim], degrees)
     for ax, (units, group) in zip(axes, by_unit.items()):
         scale = []
-        for name in group:
-            y = _shown(point[name], degrees, ds)
-            ax.plot(x, y, lw=1.0, label=f"{name}: {point[name].attrs.get('long_name', '')}")
+        for name, colour in zip(group, palettes.CATEGORY_COLOURS):
+            y = labels.shown_values(point[name], degrees, ds)
+            ax.plot(x, y, lw=1.1, color=colour, label=labels.label(ds, name))
             scale.append(np.nanmedian(np.abs(y)))
-        top = max(float(np.nanmax(np.abs(_shown(point[n], degrees, ds)))) for n in group)
+        top = max(float(np.nanmax(np.abs(labels.shown_values(point[n], degrees, ds))))
+                  for n in group)
         typical = max(1e-300, float(np.nanmax(scale)))
+        name = (labels.axis_label(ds, group[0], degrees) if len(group) == 1 else
+                f"{QUANTITY_OF_UNITS.get(units, 'value')} [{labels.pretty_units(units)}]")
         if top > 100 * typical:  # a spike (1/dphi1 reactions): a log scale shows it and the rest
             ax.set_yscale("symlog", linthresh=typical)
-            ax.set_ylabel(f"[{units}] (symmetric log)")
-        else:
-            ax.set_ylabel(f"[{units}]")
+            name += ", symlog"
+        ax.set_ylabel(labels.wrapped(name, 34))
         if angle:
             _angle_ticks(ax, degrees)
             for value, kind in _angle_marks(point):
@@ -614,12 +719,46 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
                     ax.annotate(kind, (shown, 1.0), xycoords=("data", "axes fraction"),
                                 fontsize=7, rotation=90, va="top", ha="right")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    axes[-1].set_xlabel(_label(ds, pdim, degrees))
-    where_text = ", ".join(_point_text(point, d, degrees) for d in grid_dims)
-    axes[0].set_title(f"{ds.attrs.get('title', '')}\nat {where_text}; {made_by()}",
-                      fontsize=8)
+        if len(group) > 1:
+            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                      frameon=False)
+    axes[-1].set_xlabel(labels.axis_label(ds, pdim, degrees))
+    fig.suptitle(labels.wrapped(f"{', '.join(labels.label(ds, n) for n in names)} over "
+                                f"{labels.label(ds, pdim)}, at "
+                                f"{design_text(point, grid_dims, degrees)}", 100),
+                 fontsize=9)
+    where_text = design_text(point, grid_dims, degrees, plain=True)
+    caption = ds.attrs.get("title", "")
+    fig.suptitle(fig.get_suptitle() + "\n" + labels.wrapped(
+        f"{caption} · {made_by()}" if caption else made_by(), 110), fontsize=9)
     return fig, where_text
+
+
+#: what a profile panel of several variables in one unit shows, by the unit
+QUANTITY_OF_UNITS = {"N": "force", "N m": "moment", "J": "energy", "W": "power",
+                     "rad": "angle", "deg": "angle", "rad s-1": "angular speed",
+                     "rad s-2": "angular acceleration", "m s-1": "speed", "1": "ratio"}
+
+
+def design_text(point: xr.Dataset, grid_dims: list[str], degrees: bool,
+                plain: bool = False) -> str:
+    """One design in words: each grid axis held at its value, and a chained design by the
+    parameters it sets (``design`` alone says nothing of the machine); ``plain``: by the
+    variables' names (a terminal's text), not their labels."""
+    def text(name, value):
+        return labels.value_text(point, name, value, degrees, 4, plain=plain)
+
+    parts = []
+    for dim in grid_dims:
+        if dim == "design":
+            names = [n for n in point.coords if n not in grid_dims and point[n].ndim == 0
+                     and not str(n).startswith("source_") and n != "grid_point"
+                     and point[n].dtype.kind in "fiuOSU"]
+            parts += [text(str(n), point[n].values) for n in names] or [
+                f"design {int(point[dim].values)}"]
+        else:
+            parts.append(text(dim, point[dim].values))
+    return ", ".join(parts)
 
 
 def _angle_marks(point: xr.Dataset) -> list[tuple[str, str]]:
@@ -636,12 +775,3 @@ def _angle_marks(point: xr.Dataset) -> list[tuple[str, str]]:
             if label == "special" and status == "second_special_position":
                 marks.append((float(point[name].values) + np.pi, "second special position"))
     return marks
-
-
-def _point_text(point: xr.Dataset, dim: str, degrees: bool) -> str:
-    value = point[dim].values
-    if point[dim].dtype.kind != "f":
-        return f"{dim} = {value}"
-    units = _units(point, dim, degrees)
-    shown = np.degrees(value) if units == "deg" else value
-    return f"{dim} = {shown:.4g}" + ("" if units == "-" else f" {units}")

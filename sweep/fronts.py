@@ -298,10 +298,13 @@ def _selection(ds, points, chosen, objectives_, rule, weights, where, candidates
 
 def figure(ds: xr.Dataset, result: Front, where: str | None = None, degrees: bool = True):
     """The front over the feasible designs' cloud (the first two objectives; a third, if
-    any, colours the front), the designs left out in greys named by why, and the pick."""
+    any, colours the front), the designs left out in greys named by why, and the pick. The
+    front is drawn as its designs, with the staircase of the region they dominate (two
+    objectives), not as a line through empty space."""
     from matplotlib.figure import Figure
 
-    from sweep.charts import BLANK_GREYS, VERTICAL_LABEL_WIDTH, _label, _shown, made_by
+    from sweep import labels, palettes
+    from sweep.charts import made_by
 
     objectives_ = result.objectives
     if len(objectives_) < 2:
@@ -312,11 +315,11 @@ def figure(ds: xr.Dataset, result: Front, where: str | None = None, degrees: boo
 
     def shown(name):
         var = ds[name].broadcast_like(ds["status"]).transpose(*dims)
-        return np.asarray(_shown(var, degrees, ds), dtype=float).ravel()
+        return np.asarray(labels.shown_values(var, degrees, ds), dtype=float).ravel()
 
     xs, ys = shown(x), shown(y)
     code = code.ravel()
-    fig = Figure(figsize=(7.5, 5.6), layout="constrained")
+    fig = Figure(figsize=(7.5, 6.0), layout="constrained")
     ax = fig.add_subplot()
     finite = np.isfinite(xs) & np.isfinite(ys)
     for k, reason in enumerate(reasons):
@@ -324,37 +327,40 @@ def figure(ds: xr.Dataset, result: Front, where: str | None = None, degrees: boo
         if not mask.any():
             continue
         if k == 0:
-            ax.plot(xs[mask], ys[mask], ".", ms=3, color="#9ecae1", rasterized=True,
+            ax.plot(xs[mask], ys[mask], ".", ms=3, color="#56B4E9", rasterized=True,
                     label=f"feasible ({mask.sum():,})", zorder=2)
         else:
             ax.plot(xs[mask], ys[mask], ".", ms=3, rasterized=True, zorder=1,
-                    color=BLANK_GREYS[(k - 1) % len(BLANK_GREYS)],
+                    color=palettes.BLANK_GREYS[(k - 1) % len(palettes.BLANK_GREYS)],
                     label=f"{reason.replace('_', ' ')} ({mask.sum():,})")
     front_ds = result.designs
-    fx = np.asarray(_shown(front_ds[x], degrees, ds), dtype=float)
-    fy = np.asarray(_shown(front_ds[y], degrees, ds), dtype=float)
+    fx = np.asarray(labels.shown_values(front_ds[x], degrees, ds), dtype=float)
+    fy = np.asarray(labels.shown_values(front_ds[y], degrees, ds), dtype=float)
     if len(objectives_) > 2:
         z = objectives_[2].name
-        marks = ax.scatter(fx, fy, c=np.asarray(_shown(front_ds[z], degrees, ds), float),
-                           s=22, zorder=4, cmap="viridis", label="front")
-        fig.colorbar(marks, ax=ax, label=_label(ds, z, degrees, VERTICAL_LABEL_WIDTH))
-        ax.plot(fx, fy, "-", color="#08306b", lw=0.8, zorder=3)
+        marks = ax.scatter(fx, fy, c=np.asarray(labels.shown_values(front_ds[z], degrees, ds),
+                                                float), s=26, zorder=4, cmap="viridis",
+                           edgecolors="k", linewidths=0.4, label=f"front ({len(fx):,})")
+        fig.colorbar(marks, ax=ax, label=labels.axis_label(ds, z, degrees))
     else:
-        ax.plot(fx, fy, "o-", color="#08306b", ms=4, lw=1.2, zorder=4,
-                label=f"front ({len(fx):,})")
-    ax.plot(fx[result.picked], fy[result.picked], "*", ms=13, color="#d62728", zorder=5,
+        sx, sy = staircase(fx, fy, objectives_[0].sense, objectives_[1].sense)
+        ax.plot(sx, sy, "-", color="#0072B2", lw=1.0, zorder=3)
+        ax.plot(fx, fy, "o", color="#0072B2", ms=4.5, zorder=4, label=f"front ({len(fx):,})")
+    ax.plot(fx[result.picked], fy[result.picked], "*", ms=14, color="#D55E00", zorder=5,
             markeredgecolor="k", label=f"picked ({result.rule})")
     feasible = finite & (code == 0)
     for axis, values in ((ax.set_xlim, xs[feasible]), (ax.set_ylim, ys[feasible])):
         lo, hi = float(values.min()), float(values.max())  # the feasible designs, padded:
         pad = 0.05 * (hi - lo) if hi > lo else 0.05 * max(abs(hi), 1.0)  # not the rest
         axis(lo - pad, hi + pad)
-    ax.set_xlabel(_label(ds, x, degrees) + f"  ({objectives_[0].sense})")
-    ax.set_ylabel(_label(ds, y, degrees, VERTICAL_LABEL_WIDTH) + f"  ({objectives_[1].sense})")
-    ax.legend(loc="best", fontsize=8)
-    title = ds.attrs.get("title", "")
-    ax.set_title((f"Pareto front: {title}" if title else "Pareto front") + f"\n{made_by()}",
-                 fontsize=9)
+    ax.set_xlabel(f"{labels.axis_label(ds, x, degrees)}, {objectives_[0].sense}imised")
+    ax.set_ylabel(f"{labels.axis_label(ds, y, degrees)}, {objectives_[1].sense}imised")
+    fig.legend(loc="outside lower center", fontsize=8, ncols=3, frameon=False)
+    what = (f"Pareto front of {len(fx):,} designs: "
+            + ", ".join(f"{o.sense} {labels.label(ds, o.name)}" for o in objectives_))
+    caption = ds.attrs.get("title", "")
+    fig.suptitle(labels.wrapped(what, 88) + "\n" + labels.wrapped(
+        f"{caption} · {made_by()}" if caption else made_by(), 88), fontsize=9)
     return fig
 
 
@@ -384,3 +390,24 @@ def describe(result: Front, degrees: bool = False) -> list[tuple[str, str, str, 
         rows.append((str(name), text, "" if units == "1" else units,
                      var.attrs.get("long_name", "")))
     return rows
+
+
+def staircase(fx: np.ndarray, fy: np.ndarray, x_sense: str, y_sense: str) -> tuple:
+    """The boundary of the region a two-objective front dominates: from design to design
+    (ordered along x), a step along x then one along y, so that the corners are where no
+    design lies and every design is a corner of the region."""
+    order = np.argsort(fx, kind="stable")
+    px, py = fx[order], fy[order]
+    # the region a design dominates reaches towards worse x: where x is minimised it
+    # extends to larger x, so from a design the boundary runs across at its y to the next
+    # design's x; where x is maximised it runs at the next design's y (up or down first)
+    across_first = x_sense == "min"
+    sx, sy = [px[0]], [py[0]]
+    for i in range(1, len(px)):
+        if across_first:
+            sx += [px[i], px[i]]
+            sy += [py[i - 1], py[i]]
+        else:
+            sx += [px[i - 1], px[i]]
+            sy += [py[i], py[i]]
+    return np.array(sx), np.array(sy)

@@ -57,7 +57,7 @@ def code_version() -> str:
 def status_attributes(mech) -> dict:
     """CF flag attributes of ``status``: the codes of the statuses this mechanism emits."""
     values = np.array([CODES[f] for f in mech.status], dtype=np.int8)
-    return {"long_name": "status of the grid point", "units": "1",
+    return {"long_name": "status of the grid point", "units": "1", "label": "status",
             "flag_values": values, "flag_meanings": " ".join(mech.status),
             "usable_flags": " ".join(("ok",) + tuple(mech.usable)),
             "comment": "usable_flags: statuses whose outputs are design values"}
@@ -93,7 +93,8 @@ def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
     level = sweep.run.compress_level
     for axis in sweep.axes:
         p = axis.parameter
-        ds[axis.name].attrs.update(units=p.units, long_name=p.long_name)
+        ds[axis.name].attrs.update(units=p.units, long_name=p.long_name,
+                                   **({"label": p.label} if p.label else {}))
         ds[axis.name].encoding["_FillValue"] = None
         if p.categorical:
             # fixed-width chars, not HDF5 variable-length strings: reopening a file with
@@ -106,12 +107,14 @@ def annotate(ds: xr.Dataset, sweep, chunk_shape: tuple[int, ...]) -> xr.Dataset:
                 ds[name].encoding["dtype"] = "S1"
     if mech.profile_dim is not None and mech.profile_dim.name in ds.coords:
         pdim = mech.profile_dim
-        ds[pdim.name].attrs.update(units=pdim.units, long_name=pdim.long_name)
+        ds[pdim.name].attrs.update(units=pdim.units, long_name=pdim.long_name,
+                                   **({"label": pdim.label} if pdim.label else {}))
         ds[pdim.name].encoding["_FillValue"] = None
     for name in sweep.outputs:
         o = mech.output(name)
         ds[name].attrs.update(units=o.units, long_name=o.long_name,
-                              ancillary_variables="status")
+                              ancillary_variables="status",
+                              **({"label": o.label} if o.label else {}))
         if o.description:
             ds[name].attrs["comment"] = o.description
         chunks = chunk_shape + tuple(ds.sizes[d] for d in ds[name].dims[len(chunk_shape):])

@@ -151,14 +151,16 @@ def evaluate(values: dict[str, np.ndarray], limits: tuple[Limit, ...]):
 
 def attributes(limits: tuple[Limit, ...]) -> dict:
     """The flag variable's CF attributes."""
-    return {"long_name": "which requirement the design fails (the most violated one), or "
+    return {"label": "requirements",
+            "long_name": "which requirement the design fails (the most violated one), or "
                          "met", "units": "1",
             "flag_values": np.arange(len(limits) + 2, dtype=np.int8),
             "flag_meanings": " ".join(flag_meanings(limits)),
             "requirements": json.dumps([limit.text for limit in limits])}
 
 
-MARGIN_ATTRIBUTES = {"long_name": "smallest relative slack over the requirements "
+MARGIN_ATTRIBUTES = {"label": "requirement margin",
+                     "long_name": "smallest relative slack over the requirements "
                                   "((limit - value)/|limit| for an upper limit; negative "
                                   "where one fails)", "units": "1"}
 

@@ -358,10 +358,14 @@ def _source(model: SpecModel, mech: Mechanism, designs=None):
     if designs is None:
         designs = chains.resolve(model.grid["from"], mech)
     for name in designs.columns:
+        replaced = mech.parameter(name).replaces
         for table, entries in (("grid", model.grid), ("fixed", model.fixed)):
             if name in entries:
                 raise UserError(f"{table}.{name}: set by the source designs (grid.from); "
                                 "give it once")
+            if replaced in entries:  # e.g. the source's crank speed sets the idle speed
+                raise UserError(f"{table}.{replaced}: follows from {name}, which the "
+                                "source designs set (grid.from); leave it out")
     return designs
 
 

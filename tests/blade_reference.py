@@ -80,8 +80,10 @@ class Blade:
 
     def flight(self, t, y, up, cap=None, horizon=200 * math.pi):
         """Free flight to the first face met within reach, or escape, or the horizon:
-        (kind, t, y, up, side) with kind in 'contact', 'escape', 'none'."""
+        (kind, t, y, up, side, amplitude) with kind in 'contact', 'escape', 'none', and
+        amplitude the largest |psi| on the way (at its ends and turning points)."""
         t0 = t
+        amplitude = abs(y[0])
         while True:
             def rising(tt, yy):
                 return (tt - up) + beta(yy[0], self.k)
@@ -91,22 +93,30 @@ class Blade:
 
             def escape(tt, yy):
                 return abs(yy[0]) - math.pi
+
+            def turning(tt, yy):
+                return yy[1]
             rising.terminal, rising.direction = True, 1.0
             falling.terminal, falling.direction = True, -1.0
             escape.terminal, escape.direction = True, 1.0
+            turning.terminal = False
             sol = solve_ivp(self.rhs, (t, t0 + horizon), list(y),
-                            events=[rising, falling, escape], first_step=cap, **TIGHT)
+                            events=[rising, falling, escape, turning], first_step=cap,
+                            **TIGHT)
+            turns = np.reshape(sol.y_events[3], (-1, 2))
+            amplitude = max(amplitude, np.max(np.abs(turns[:, 0]), initial=0.0))
             hits = [(sol.t_events[i][0], i, sol.y_events[i][0]) for i in range(3)
                     if sol.t_events[i].size]
             if not hits:
-                return "none", sol.t[-1], sol.y[:, -1], up, 0.0
+                return "none", sol.t[-1], sol.y[:, -1], up, 0.0, amplitude
             te, i, ye = min(hits, key=lambda x: x[0])
+            amplitude = max(amplitude, abs(ye[0]))
             if i == 2:
-                return "escape", te, ye, up, 0.0
+                return "escape", te, ye, up, 0.0, amplitude
             side = 1.0 if i == 0 else -1.0
             level = up if i == 0 else up - TWO_PI
             if abs(ye[0]) <= self.window:
-                return "contact", te, ye, up, side
+                return "contact", te, ye, up, side, amplitude
             up += side * TWO_PI  # beyond the blade's reach: passed
             t, y, cap = te, ye, None
             del level
@@ -186,7 +196,8 @@ class Blade:
                 g2 = abs(self.free_gap_acceleration(y)) + 1e-300
                 cap = min(max(0.25 * abs(gap_after) / g2, 1e-14), 0.5)
             t_start = t
-            kind, t, y, up, side = self.flight(t, y, up, cap)
+            kind, t, y, up, side, amplitude = self.flight(t, y, up, cap)
+            sec["amplitude"] = max(sec.get("amplitude", 0.0), amplitude)
             if kind != "contact":
                 return dict(outcome=kind, sections=secs, period=0)
             flight_time = t - t_start
@@ -217,7 +228,8 @@ def _period(secs, max_period, tol=1e-9):
 def cycle_values(result):
     """The steady cycle's values, as the atlas gives them at omega1 = l2 = 1: the mean
     opening impact speed, the rotor angle per section, the slowest over the fastest
-    contact, the least edge distance, and whether it chatters."""
+    contact, the least edge distance, the largest |psi| (amplitude), and whether it
+    chatters."""
     p = result["period"]
     secs = result["sections"][-p - 1:-1]
     last = result["sections"][-1]
@@ -226,6 +238,7 @@ def cycle_values(result):
                 impact_interval=(last["t"] - secs[0]["t"]) / p,
                 impact_speed_min_ratio=min(speeds) / max(speeds),
                 edge_margin=min(e for s in secs for e in s["edges"]),
+                amplitude=max(s["amplitude"] for s in secs),
                 chatter=any(s["chatter"] for s in secs), period=p)
 
 

@@ -149,7 +149,7 @@ def section_jacobian(model: str, tool: str):
     start = make_tracker(c, 2 if m.driven else 4).start
     first, compose, rotor_angle, rotor_speed = c.first, m.compose, m.rotor_angle, m.rotor_speed
     psi_of, dpsi_of, driven = m.psi, m.dpsi, m.driven
-    blade = tool == "lab_window"
+    on_blade = tool == "lab_window"
 
     @njit
     def run(t, y, data, p, r, s, period, tangent, d):
@@ -203,7 +203,7 @@ def section_jacobian(model: str, tool: str):
                 else:
                     dpsi += delta
                 phi, t2 = rotor_angle(t, y), t
-                if blade:
+                if on_blade:
                     phi = data[3] - blade.beta(psi, data[2])
                     if driven:
                         t2 = phi

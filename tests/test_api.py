@@ -137,7 +137,8 @@ def test_chart_and_profile_give_figures_and_save_them(tmp_path, memory_atlas):
     fig = sweep.profile(forces, ["F21_n", "F34_n", "balancing_moment"], "omega1 == 30")
     # one panel per unit: forces in N, the moment in N m
     labels = [ax.get_ylabel() for ax in fig.axes]
-    assert len(labels) == 2 and labels[0].startswith("[N]") and labels[1].startswith("[N m]")
+    # one axis per unit, each named by the quantity it draws
+    assert len(labels) == 2 and labels[0] == "force [N]" and labels[1].endswith("[N·m]")
 
 
 def test_boundaries_and_info_from_python(tmp_path, memory_atlas):
@@ -178,7 +179,7 @@ def test_counts_are_categories_and_rotor_angles_are_turns(tmp_path):
     assert drawn.colour_bar
     fig = sweep.chart(rp, "k", "R", "impact_interval")
     bar = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"][0]
-    assert bar.get_ylabel().startswith("impact_interval [turn]")
+    assert bar.get_ylabel() == r"impact interval $\tau_1$ [turn]"
     top = float(np.nanmax(rp["impact_interval"].values)) / (2 * np.pi)
     assert bar.get_ylim()[1] == pytest.approx(top, rel=1e-12)
 
@@ -198,11 +199,11 @@ def test_six_link_profile_has_angles_in_one_unit(tmp_path):
                      "method": {"profile_points": 91}})
     fig = sweep.profile(six, ["rocker_angle"], "beta == 0")
     ax = fig.axes[0]
-    assert ax.get_ylabel().startswith("[deg]") and "[deg]" in ax.get_xlabel()
+    assert ax.get_ylabel().endswith("[°]") and "[°]" in ax.get_xlabel()
     line = ax.get_lines()[0].get_ydata()
     np.testing.assert_allclose(line, np.degrees(six["rocker_angle"].values[0]), rtol=1e-15)
     fig = sweep.profile(six, ["rocker_angle"], "beta == 0", degrees=False)
-    assert fig.axes[0].get_ylabel().startswith("[rad]") and "[rad]" in fig.axes[0].get_xlabel()
+    assert fig.axes[0].get_ylabel().endswith("[rad]") and "[rad]" in fig.axes[0].get_xlabel()
 
 
 def test_run_with_a_path_writes_the_chart_of_the_spec(tmp_path):

@@ -277,7 +277,7 @@ def test_chart_draws_the_boundaries_and_refuses_another_sweeps(tmp_path):
     result = boundaries.refine(ds, "status", 1e-8)
     drawn = design_chart(ds, "R", "largest_link", "impact_transfer_ratio",
                          tmp_path / "c.png", boundaries=result)
-    assert "boundaries of status, refined to 1e-08" in drawn.legend
+    assert "status boundaries, to 1e-08" in drawn.legend
     grid_dims = list(ds["status"].dims)
     for t in ("a", "b"):
         segments = boundary_segments(result, grid_dims, ds["status"].shape, "R",

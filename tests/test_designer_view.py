@@ -110,7 +110,7 @@ def test_a_flag_is_drawn_as_categories_with_its_meanings(tmp_path, pendulum):
     codes = np.unique(ds.regime.sel(omega1=60.0).values)
     meanings = dict(zip(ds.regime.attrs["flag_values"], ds.regime.attrs["flag_meanings"].split()))
     assert not drawn.colour_bar  # categories, not a continuous scale
-    present = [meanings[c] for c in codes]
+    present = [meanings[c].replace("_", " ") for c in codes]  # the meanings, as words
     assert [label for label in drawn.legend if not label.startswith("no ")] == present
     assert drawn.panel_titles == [""]  # omega1 taken at one value: one panel
 
@@ -142,8 +142,8 @@ def test_blank_cells_name_their_status_and_usable_results_are_not_blank(tmp_path
     expected = {}
     for code in np.unique(sub.status.values[blank]):
         expected[status[code]] = int((sub.status.values[blank] == code).sum())
-    labels = [label for label in drawn.legend if label.startswith("no impact_speed value")]
-    assert sorted(labels) == sorted(f"no impact_speed value: {m} ({n:,} points)"
+    labels = [label for label in drawn.legend if label.startswith("no value")]
+    assert sorted(labels) == sorted(f"no value: {m.replace('_', ' ')} ({n:,})"
                                     for m, n in expected.items())
     # the regime exists at every status: escape is charted as a category, not blanked
     drawn = design_chart(ds, "k", "R", "regime", tmp_path / "r.png", at={"omega1": (20.0, "")})
@@ -165,19 +165,20 @@ def test_panels_wrap_log_axes_read_as_numbers_and_angles_in_degrees(tmp_path):
     ds = xr.open_dataset(atlas(tmp_path, CRANK))
     drawn = design_chart(ds, "largest_link", "R", "impact_speed", tmp_path / "c.png")
     assert len(drawn.panel_titles) == 4 and (drawn.rows, drawn.columns) == (2, 3)
-    assert drawn.panel_titles == [f"omega1 = {w:g} rad s-1" for w in (10, 20, 30, 40)]
+    assert drawn.panel_titles == [rf"crank speed $\omega_1$ = {w:g} rad/s"
+                                  for w in (10, 20, 30, 40)]
     assert drawn.xscale == "log"  # a log-spaced axis on x is drawn log
     assert drawn.xticks and all(re.fullmatch(r"[0-9.]+", t) for t in drawn.xticks), drawn.xticks
     lf = ('mechanism = "linkage_forces"\n[grid]\nomega1 = [5.0, 20.0]\n'
           'tilt = [0.0, 0.5, 1.0]\n[method]\nprofile_points = 8\n')
     ds = xr.open_dataset(atlas(tmp_path, lf, "lf.nc"))
     drawn = design_chart(ds, "omega1", "tilt", "force_peak_D", tmp_path / "d.png")
-    assert drawn.ylabel.startswith("tilt [deg]")
+    assert drawn.ylabel == r"tilt $\theta$ [°]"
     ticks = [float(t.replace("−", "-")) for t in drawn.yticks]
     assert max(ticks) > 40  # 1 rad = 57.3 deg: the axis is in degrees
     drawn = design_chart(ds, "omega1", "tilt", "force_peak_D", tmp_path / "d.png",
                          degrees=False)
-    assert drawn.ylabel.startswith("tilt [rad]")
+    assert drawn.ylabel == r"tilt $\theta$ [rad]"
 
 
 def test_chart_input_mistakes_are_one_line_errors(tmp_path, pendulum, capsys):

@@ -253,6 +253,9 @@ def test_a_first_runs_compile_is_said_with_its_time_and_a_warm_start_says_nothin
 
     from sweep import engine, runner
 
+    # one group of entry points, compiled by the stand-in below
+    monkeypatch.setattr(engine, "sample_parameters", lambda sweep: None)
+    monkeypatch.setattr(engine, "compile_groups", lambda sweep, params: [None])
     monkeypatch.setattr(engine, "warm_up", lambda sweep, columns=None: time.sleep(1.2))
     runner.compile_first(None, announce=True)
     err = capsys.readouterr().err

@@ -8,7 +8,8 @@ returns ``flight(t, y, p, data, settings, refine) -> Flight``. Per accepted step
   ``on_event`` says whether the event ends the flight or is passed (the flight then goes on
   from the event, with updated system data and the same step size);
 - the monitored angle's largest magnitude (the amplitude) is kept at step ends and, with
-  ``refine``, at turning points inside a step (polished like events);
+  ``refine``, at turning points inside a step or inside its part flown up to an event
+  (polished like events);
 - the monitored acceleration's largest magnitude is kept at step ends, and, with ``refine``,
   sampled inside every step on the interpolant (PEAK_SAMPLES), which picks the place; it is
   refined at the end by golden section around the largest sample, cut at the event, each
@@ -121,6 +122,12 @@ def make_flight(system):
                 terminal, new_data = on_event(e, t + s, ys, fs, data, p)
                 angle_e, rate_e, accel_e = monitor(t + s, ys, fs)
                 amplitude, peak = max(amplitude, abs(angle_e)), max(peak, abs(accel_e))
+                # a turn before the event, in the part of the step flown (a pendulum that
+                # turns just before it passes the blade's edge level); the step's rest is
+                # flown again from the event
+                if refine and (monitor(t, y, f)[1] < 0.0) != (rate_e < 0.0):
+                    amplitude = max(amplitude, abs(turning_angle(t, s, y, f, ys, fs, p,
+                                                                 settings)))
                 if terminal:
                     if refine:  # the largest |accel|, refined by golden section
                         best, best_value = track_peak(best, best_value, t, h, y, f, y1, f1,

@@ -11,7 +11,8 @@ from numba import njit
 from kernels import INNER_OPTIONS
 from kernels.machine.blow import Blow, blow, node
 from kernels.machine.data import with_flywheel
-from kernels.machine.declaration import MOTOR_CONSTANT, START_REST, START_RUNNING
+from kernels.machine.declaration import (LAW_KINEMATIC, MOTOR_CONSTANT, START_REST,
+                                         START_RUNNING)
 from kernels.machine.revolution import REV_BLOW, Revolution, revolution
 
 #: the steady state: the section map's residual |Phi(w) - w| <= FIXED_POINT_TOL w
@@ -20,8 +21,9 @@ FIXED_POINT_TOL = 1e-11
 RUNUP_REVOLUTIONS = 12
 #: how the search for the steady cycle ends: the cycle found; a revolution that did not
 #: reach the blow (its ``end`` says how); a blow that sends the crank backwards; no fixed
-#: point within the revolutions allowed (or no speed to start from)
-CYCLE_STEADY, CYCLE_ENDED, CYCLE_REVERSES, CYCLE_NO_CONVERGENCE = range(4)
+#: point within the revolutions allowed (or no speed to start from); a blow whose law
+#: creates energy (the kinematic law at some designs: no motor can balance it)
+CYCLE_STEADY, CYCLE_ENDED, CYCLE_REVERSES, CYCLE_NO_CONVERGENCE, CYCLE_GAINS_ENERGY = range(5)
 #: the steady cycle: how the search ended, the speed after the blow and the revolution
 #: from there, the Blow at its end, revolutions flown and integration steps
 Cycle = namedtuple("Cycle", ["outcome", "w_plus", "rev", "blow", "revolutions", "steps"])
@@ -98,6 +100,8 @@ def solve(m, crank_own, flywheel, r, law, settings, max_revolutions, start_mode)
     with that flywheel and the reference scales of the cycle's state)."""
     m = with_flywheel(m, flywheel, crank_own, 1.0, 1.0)
     nd = node(m)
+    if law == LAW_KINEMATIC and not blow(1.0, r, law, nd, m).loss > 0.0:
+        return Cycle(CYCLE_GAINS_ENERGY, math.nan, _no_revolution(), _no_blow(), 0, 0), nd, m
     wref = constant_speed_guess(nd, r, law, m)
     if not math.isfinite(wref):
         if m.motor.law == MOTOR_CONSTANT:

@@ -49,7 +49,49 @@ def _rules(given: dict) -> str | None:
     return None
 
 
+#: the short label a chart shows of each parameter, output and profile (Quantity.label)
+LABELS = {
+    "type": "type", "largest_link": "largest link ratio", "base_root": "base root",
+    "lambda0": r"base ratio $\lambda_0$", "lambda2": r"rod ratio $\lambda_2$",
+    "lambda3": r"rocker ratio $\lambda_3$", "design_restitution": "design restitution $R_d$",
+    "R": "material restitution $R$", "crank_length": "crank $l_1$",
+    "m1": "crank mass $m_1$", "m2": "coupler mass $m_2$", "m3": "rocker mass $m_3$",
+    "s1": "crank centroid $s_1$", "s2": "coupler centroid $s_2$", "s3": "rocker centroid $s_3$",
+    "q1": "crank offset $q_1$", "q2": "coupler offset $q_2$", "q3": "rocker offset $q_3$",
+    "J1": "crank inertia $I_{S1}$", "J2": "coupler inertia $I_{S2}$",
+    "J3": "rocker inertia $I_{S3}$", "flywheel_inertia": "flywheel $J_f$",
+    "motor_law": "motor law", "stall_torque": "stall torque $M_0$",
+    "idle_speed": r"idle speed $\omega_\mathrm{idle}$", "omega1": r"mean crank speed $\omega_1$",
+    "tilt": r"tilt $\theta$", "g": "gravity $g$", "load_force_x": "load along base",
+    "load_force_y": "load across base", "load_arm": "load arm", "load_offset": "load offset",
+    "load_moment": "load couple", "impact_law": "impact law",
+    "mean_crank_speed": r"mean crank speed $\bar\omega_1$",
+    "speed_fluctuation": r"speed fluctuation $\delta$",
+    "crank_speed_before_blow": r"$\omega_1^-$ before blow",
+    "crank_speed_after_blow": r"$\omega_1^+$ after blow",
+    "crank_speed_jump": r"speed jump $\Delta\omega_1$", "tool_impulse": r"tool impulse $\Pi$",
+    "crank_impulse": "crank impulse $H$", "motor_torque_peak": r"peak torque $M_\max$",
+    "motor_torque_rms": r"RMS torque $M_\mathrm{rms}$", "motor_power_mean": r"mean power $\bar P$",
+    "blow_energy": "blow energy $E$", "blow_loss": r"blow loss $\Delta E$",
+    "energy_to_material": r"to material $\Delta E_\mathrm{tool}$",
+    "capture_loss": r"capture loss $\Delta E_\mathrm{cap}$", "blow_rate": "blow rate",
+    "blow_efficiency": r"blow efficiency $\eta$", "cycle_period": "cycle period $T_c$",
+    "impact_speed": "impact speed $v$", "restitution_kinematic": "kinematic restitution $R_k$",
+    "restitution_mismatch": "mismatch $R_k + R$", "reduced_inertia_before": "$J^-$ before blow",
+    "reduced_inertia_after": "$J^+$ after blow", "energy_balance_residual": "energy residual",
+    "flywheel_sizing": "flywheel sizing", "revolutions": "revolutions", "n_steps": "steps",
+    "dynamic_force_peak_A": r"peak $|F_{14}|$ at A", "dynamic_force_peak_B": r"peak $|F_{21}|$ at B",
+    "dynamic_force_peak_C": r"peak $|F_{32}|$ at C", "dynamic_force_peak_D": r"peak $|F_{34}|$ at D",
+    "flywheel_for_delta": r"flywheel for $\delta$",
+    "flywheel_for_delta_classical": r"flywheel for $\delta$ (classical)",
+    "crank_speed": r"crank speed $\omega_1$", "crank_acceleration": r"crank acceleration $\varepsilon_1$",
+    "motor_torque": "motor torque $M$", "shaft_torque": "shaft torque",
+    "angle_after_blow": r"angle after blow $\varphi_1-\varphi_1^*$",
+}
+
+
 DECLARATION = Mechanism(
+    labels=LABELS,
     name="impact_machine",
     title="Crank-driven impact machine: energy per blow, motor, flywheel",
     summary="one degree of freedom between blows (reduced inertia J(phi1), motor law, "
@@ -97,6 +139,9 @@ DECLARATION = Mechanism(
                  default=1200.0, **POSITIVE),
         Quantity("idle_speed", "rad s-1", "motor speed at zero torque (omega_idle)", "ω_idle",
                  default=32.0, used_when=_LINEAR, **POSITIVE),
+        Quantity("omega1", "rad s-1", "the steady mean crank speed to hold; given, the "
+                 "motor's idle speed follows from it (its exact root; linear motor law)",
+                 "ω1", used_when=_LINEAR, replaces="idle_speed", **POSITIVE),
         Quantity("tilt", "rad", "inclination of the base AD to the horizontal", "θ",
                  default=math.radians(25.0), minimum=-math.pi, maximum=math.pi),
         Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG),
@@ -139,12 +184,15 @@ DECLARATION = Mechanism(
                "energy just before it", "E_striker"),
         Output("blow_loss", "J", "kinetic energy lost at the blow", "ΔE"),
         Output("energy_to_material", "J", "energy delivered to the worked material "
-               "((1 - R^2) m_r omega3^2 / 2)", "ΔE_tool"),
+               "((1 - R^2) m_r omega3^2 / 2; generalised law only: the kinematic law does "
+               "not split its loss, NaN)", "ΔE_tool"),
         Output("capture_loss", "J", "parasitic loss in the linkage at the blow (the "
-               "plastic capture onto the departure branch)", "ΔE_capture"),
+               "plastic capture onto the departure branch; generalised law only, NaN under "
+               "the kinematic law)", "ΔE_capture"),
         Output("blow_rate", "min-1", "blows per minute (60 / T_c)"),
         Output("blow_efficiency", "1", "share of the motor's work per cycle that reaches "
-               "the worked material", "η_blow"),
+               "the worked material (generalised law only, NaN under the kinematic law)",
+               "η_blow"),
         Output("cycle_period", "s", "time between blows in the steady cycle", "T_c"),
         Output("impact_speed", "m s-1", "rocker tip speed at the blow (|u31- omega1-| l3)"),
         Output("restitution_kinematic", "1", "kinematic restitution of the linkage "
@@ -155,8 +203,16 @@ DECLARATION = Mechanism(
                "before the blow", "J⁻"),
         Output("reduced_inertia_after", "kg m2", "reduced inertia about the crank just "
                "after the blow", "J⁺"),
-        Output("energy_balance_residual", "1", "(motor work + gravity + load - blow "
-               "loss) / blow loss over the steady cycle", diagnostic=True),
+        Output("energy_balance_residual", "1", "(motor work - blow loss) / blow loss over "
+               "the steady cycle: gravity and the load are conservative and do no work over "
+               "a closed cycle, so this is the integration's and the fixed point's error in "
+               "the cycle's energy balance", diagnostic=True),
+        Output("idle_speed", "rad s-1", "the motor's idle speed, given or solved for the "
+               "mean crank speed omega1", "ω_idle", echoes="idle_speed"),
+        Output("flywheel_sizing", "1", "how the flywheel came about: given; sized for "
+               "method.delta_target; or not needed (the crank alone holds the speed "
+               "fluctuation under the target, and the flywheel is 0)",
+               flags={"given": 0, "sized": 1, "not_needed": 2}),
         Output("revolutions", "1", "revolutions flown to find the steady state",
                diagnostic=True, count=True),
         Output("n_steps", "1", "integration steps, accepted and rejected", diagnostic=True,
@@ -193,7 +249,8 @@ DECLARATION = Mechanism(
     profile_coordinate=lambda method: cell_midpoints(method.profile_points, 2.0 * np.pi),
     status=("ok", "not_assemblable", "no_real_synthesis", "degenerate", "no_impact",
             "stalls", "reverses", "singular_inertia", "too_slow", "no_convergence",
-            "max_steps", "step_underflow", "nonfinite"),
+            "max_steps", "step_underflow", "nonfinite", "gains_energy",
+            "unreachable_speed"),
     rules=_rules,
     method=(
         Quantity("tol", "1", "relative tolerance of the revolution's integration (DOPRI5 "
