@@ -212,7 +212,8 @@ DECLARATION = Mechanism(
         Output("flywheel_sizing", "1", "how the flywheel came about: given; sized for "
                "method.delta_target; or not needed (the crank alone holds the speed "
                "fluctuation under the target, and the flywheel is 0)",
-               flags={"given": 0, "sized": 1, "not_needed": 2}),
+               flags={"undetermined": -1, "given": 0, "sized": 1, "not_needed": 2},
+               undetermined="undetermined"),
         Output("revolutions", "1", "revolutions flown to find the steady state",
                diagnostic=True, count=True),
         Output("n_steps", "1", "integration steps, accepted and rejected", diagnostic=True,
