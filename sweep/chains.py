@@ -3,7 +3,7 @@
     mechanism = "linkage_forces"
     [grid]
     from = {atlas = "cr.nc", where = 'type == "a"', carry = ["blow_energy"]}
-    m3 = [6.0, 8.0]                # other axes as usual, after the designs
+    m2 = [2.0, 3.0]                # other axes as usual, after the designs
 
 The source's feasible designs (status ok, its requirements met) that satisfy ``where``
 become one grid axis, ``design``, in the source's grid order; each of them sets the target
@@ -45,12 +45,16 @@ class Mapping:
     expression over the source's variables}, and a condition every design must meet.
     ``optional``: entries that apply where the source has every variable they name (an
     input the source may not have been given); where it does not, the target keeps its own
-    value, and the run says so."""
+    value, and the run says so. ``own``: the target's parameters the source design does not
+    give (a quantity its model has not), said at the start of a run where the spec leaves
+    them at the target's defaults, ``own_why`` saying why."""
 
     columns: dict
     requires: str | None = None
     why: str = ""
     optional: dict = field(default_factory=dict)
+    own: tuple = ()
+    own_why: str = ""
 
 
 #: the declared mappings: (source mechanism, target mechanism) -> Mapping
@@ -58,7 +62,11 @@ MAPPINGS = {
     ("crank_rocker", "linkage_forces"): Mapping(
         {"l0": "lambda0 * crank_length", "l1": "crank_length",
          "l2": "lambda2 * crank_length", "l3": "lambda3 * crank_length",
-         "omega1": "omega1"}),
+         "omega1": "omega1"},
+        # the rocker's inertia about D where the source has one, all of it as J3 with no
+        # mass (the source knows no centroid: the rocker's weight is not in it)
+        optional={"J3": "rocker_inertia", "m3": "0 * rocker_inertia"},
+        own=("m1", "m2", "J1", "J2"), own_why="the source models no crank or coupler mass"),
     ("crank_rocker", "impact_machine"): Mapping(
         # the linkage, the material it was synthesised for and the crank speed it was
         # designed at (the machine's motor is sized for it: its idle speed solved); the
@@ -70,7 +78,11 @@ MAPPINGS = {
     ("crank_rocker", "six_link"): Mapping(
         {"mu4": "lambda2", "mu5": "lambda3"}, requires='type == "b"',
         why="six_link's second stage is a type b four-bar (largest rocker): mu4 = lambda2, "
-            "mu5 = lambda3, its base 1 - mu4 + mu5 = lambda0"),
+            "mu5 = lambda3, its base 1 - mu4 + mu5 = lambda0",
+        optional={"rocker_inertia": "rocker_inertia"},
+        own=("crank_length", "omega1"),
+        own_why="the source's crank length and speed are its second stage's; these are the "
+                "first stage's, whose ratio to the second's varies over the cycle"),
 }
 
 
@@ -83,7 +95,9 @@ class Designs:
     coordinates: dict  # name -> (values per design, attrs)
     record: dict  # the recorded spec's from-table (atlas, where, map, designs, sha256)
     provenance: dict = field(default_factory=dict)  # the source's title, spec, code version
-    notes: tuple = ()  # what the target takes that the source does not give, one line each
+    lacking: tuple = ()  # (source variables missing, target parameters kept) per optional
+    own: tuple = ()  # the target's parameters the source's model has not (Mapping.own)
+    own_why: str = ""
 
     @property
     def count(self) -> int:
@@ -174,18 +188,16 @@ def _designs(ds, table: dict, mech, path: Path) -> Designs:
         raise UserError(f"grid.from.map: no declared mapping from {source} to {mech.name}; "
                         "give map = {PARAMETER = \"EXPRESSION over the source's variables\"}")
     ds = _with_fixed(ds)
-    notes = []
-    optional = {}
+    optional, kept = {}, {}
     for name, expression in (declared.optional if declared else {}).items():
         if name in table["map"]:
             continue
-        missing = sorted(_names_in(expression) - set(map(str, ds.variables)))
+        missing = tuple(sorted(_names_in(expression) - set(map(str, ds.variables))))
         if missing:
-            q = known[name]
-            notes.append(f"grid.from: the source has no {', '.join(missing)}: {name} keeps "
-                         f"the target's {q.default!r} {q.units}".rstrip())
+            kept.setdefault(missing, []).append(name)
         else:
             optional[name] = expression
+    lacking = tuple((missing, tuple(names)) for missing, names in kept.items())
     columns = {**(declared.columns if declared else {}), **optional, **table["map"]}
     if not columns:
         raise UserError(f"grid.from.map: the source's designs set no parameter of "
@@ -249,7 +261,38 @@ def _designs(ds, table: dict, mech, path: Path) -> Designs:
     coordinates[SOURCE_PREFIX + "index"] = (points.astype(np.int64), {
         "units": "1", "long_name": "flat (C-order) index of the design in the source's grid "
                                    "(a front's: its place on the front)"})
-    return Designs(codes, coordinates, record, provenance, tuple(notes))
+    own = tuple(n for n in (declared.own if declared else ()) if n not in columns)
+    return Designs(codes, coordinates, record, provenance, lacking,
+                   own, declared.own_why if declared else "")
+
+
+def _value_text(q) -> str:
+    """A parameter's default as a note gives it: ``J3 = 0.17 kg m2``."""
+    if q.default is None:
+        return f"{q.name} unset"
+    value = f"{q.default:.4g}" if isinstance(q.default, float) else repr(q.default)
+    return f"{q.name} = {value} {q.units if q.units != '1' else ''}".rstrip()
+
+
+def notes(designs: Designs, mech, given) -> tuple:
+    """One line for each thing the target takes from its own defaults because the source
+    design does not give it, where the spec (``given``: its grid and fixed names) leaves it
+    so: an optional entry whose source variable is missing, and the parameters the source's
+    model has not (``Mapping.own``)."""
+    lines = []
+    for missing, names in designs.lacking:
+        left = [mech.parameter(n) for n in names if n not in given]
+        if left:
+            lines.append(f"grid.from: the source has no {', '.join(missing)}: "
+                         + ", ".join(q.name for q in left)
+                         + (" keeps" if len(left) == 1 else " keep") + " the target's "
+                         + ", ".join(_value_text(q) for q in left))
+    left = [mech.parameter(n) for n in designs.own if n not in given]
+    if left:
+        lines.append(f"grid.from: {designs.provenance.get('mechanism', 'the source')} "
+                     f"designs give no {', '.join(q.name for q in left)} ({designs.own_why}): "
+                     f"{mech.name}'s own " + ", ".join(_value_text(q) for q in left))
+    return tuple(lines)
 
 
 def _names_in(expression: str) -> set[str]:

@@ -123,6 +123,38 @@ def value_text(ds: xr.Dataset, name: str, value, degrees: bool = True,
         "" if not unit else ("°" if unit == "°" else f" {unit}"))
 
 
+_GREEK = {"alpha": "α", "beta": "β", "gamma": "γ", "delta": "δ", "varepsilon": "ε",
+          "epsilon": "ϵ", "eta": "η", "theta": "θ", "kappa": "κ", "lambda": "λ", "mu": "μ",
+          "nu": "ν", "xi": "ξ", "pi": "π", "sigma": "σ", "tau": "τ", "varphi": "φ",
+          "phi": "ϕ", "psi": "ψ", "omega": "ω", "Delta": "Δ", "Omega": "Ω", "Pi": "Π",
+          "Psi": "Ψ", "max": "max", "min": "min", "arg": "arg "}
+_SUBSCRIPT = dict(zip("0123456789+-aehijklmnoprstuvx", "₀₁₂₃₄₅₆₇₈₉₊₋ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓ"))
+_SUPER = dict(zip("0123456789+-*", "⁰¹²³⁴⁵⁶⁷⁸⁹⁺⁻*"))
+
+
+def plain(text: str) -> str:
+    """A label's mathtext as plain Unicode, for a page that draws no TeX: ``$\\omega_1$``
+    -> ``ω₁``, ``$|u_{31}|$`` -> ``|u₃₁|``, ``$\\bar\\omega_1$`` -> ``ω̄₁``; a subscript
+    Unicode has no letters for stays written with ``_``."""
+    def script(match, table, mark):
+        body = match.group(1) if match.group(1) is not None else match.group(2)
+        if all(c in table for c in body):
+            return "".join(table[c] for c in body)
+        return mark + body
+
+    def math(span: str) -> str:
+        span = re.sub(r"\\mathrm\{([^}]*)\}", r"{\1}", span)
+        span = re.sub(r"\\bar\s*\\?([A-Za-z]+)",
+                      lambda m: _GREEK.get(m.group(1), m.group(1)) + "\u0304", span)
+        span = re.sub(r"\\([A-Za-z]+)\s?", lambda m: _GREEK.get(m.group(1), m.group(1)),
+                      span)
+        span = re.sub(r"_(?:\{([^}]*)\}|(.))", lambda m: script(m, _SUBSCRIPT, "_"), span)
+        span = re.sub(r"\^(?:\{([^}]*)\}|(.))", lambda m: script(m, _SUPER, "^"), span)
+        return span.replace("{", "").replace("}", "")
+
+    return re.sub(r"\$([^$]*)\$", lambda m: math(m.group(1)), text)
+
+
 def wrapped(text: str, width: int) -> str:
     """Text wrapped to lines of ``width`` characters, a mathtext span ($...$) never cut."""
     glue = "\x00"

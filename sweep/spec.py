@@ -278,7 +278,10 @@ def _validate(raw: dict, designs=None) -> Sweep:
     _where_used(mech, given, method)
     outputs = _outputs(model, mech, axes, record)
     outputs, notes = _with_required_outputs(model, mech, outputs)
-    notes += designs.notes if designs is not None else ()
+    if designs is not None:
+        from sweep import chains
+
+        notes += chains.notes(designs, mech, {*model.grid, *model.fixed})
     given["outputs"] = set(outputs)
     _mechanism_rules(mech, given)
     record = record._replace(outputs=tuple(outputs))

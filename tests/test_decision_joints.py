@@ -38,7 +38,8 @@ def crank_rocker_designs(tmp_path, rocker_inertia=True, seed=62):
                          "omega1": sorted(rng.uniform(12.0, 24.0, 2).round(3).tolist())},
                 "fixed": fixed,
                 "outputs": ["lambda0", "lambda2", "lambda3", "impact_speed",
-                            "transfer_before", "crank_length", "omega1"]
+                            "transfer_before", "restitution_kinematic", "crank_length",
+                            "omega1"]
                 + (["blow_energy"] if rocker_inertia else [])}
     path = tmp_path / "cr.nc"
     runner.run_sweep(spec.validate(document), path, progress=False)
@@ -90,6 +91,46 @@ def test_what_the_source_lacks_is_said_and_recorded_and_what_it_fixes_is_not_ove
     on_purpose = json.loads(json.dumps(document))
     on_purpose["grid"]["from"]["map"] = {"R": "R * 0 + 0.25"}
     assert set(spec.validate(on_purpose).axes[0].columns["R"]) == {0.25}
+
+
+def test_chained_joint_forces_carry_the_sources_rocker_and_their_cycle_work_is_its_loss(
+        tmp_path):
+    """crank_rocker -> linkage_forces at random designs: the rocker is the source's
+    (J3 = rocker_inertia about D, no mass), the links the source has no model of are named
+    in one note; with massless crank and coupler, the balancing moment's work over a
+    cycle at constant omega1 is the rocker's kinetic energy lost at the impact node, which
+    the source gives independently: blow_energy (1 - Rk^2), to 1e-7."""
+    source = crank_rocker_designs(tmp_path)
+    with xr.open_dataset(source) as cr:
+        cr = cr.load()
+    inertia = json.loads(cr.attrs["spec"])["fixed"]["rocker_inertia"]
+    chained = spec.validate({"mechanism": "linkage_forces",
+                             "grid": {"from": {"atlas": str(source)}}})
+    assert len(chained.notes) == 1 and all(n in chained.notes[0] for n in
+                                           ("m1 = 2", "m2 = 3", "J1", "J2", "crank_rocker"))
+    massless = {"m1": 0.0, "m2": 0.0, "J1": 0.0, "J2": 0.0}
+    chained = spec.validate({"mechanism": "linkage_forces",
+                             "grid": {"from": {"atlas": str(source)}}, "fixed": massless})
+    assert chained.notes == ()
+    ds = runner.run_in_memory(chained)
+    np.testing.assert_array_equal(ds.J3.values, inertia)
+    np.testing.assert_array_equal(ds.m3.values, 0.0)
+    point = cr.stack(p=["R", "largest_link", "omega1"]).isel(p=ds.source_index.values)
+    usable = np.isin(sweep.decode(ds).status.values, ["special_position",
+                                                      "second_special_position"])
+    assert usable.sum() >= 6
+    loss = point.blow_energy.values * (1 - point.restitution_kinematic.values ** 2)
+    np.testing.assert_allclose(np.abs(ds.cycle_work.values[usable]), loss[usable],
+                               rtol=1e-7)
+    (tmp_path / "lacking").mkdir()
+    lacking = crank_rocker_designs(tmp_path / "lacking", rocker_inertia=False)
+    notes = spec.validate({"mechanism": "linkage_forces",
+                           "grid": {"from": {"atlas": str(lacking)}}}).notes
+    assert any("no rocker_inertia: J3, m3 keep the target's" in n for n in notes), notes
+    notes = spec.validate({"mechanism": "linkage_forces", "fixed": {"J3": 0.04},
+                           "grid": {"from": {"atlas": str(lacking)}}}).notes
+    assert any("no rocker_inertia: m3 keeps the target's m3 = 8 kg" in n for n in notes)
+    assert not any("J3" in n for n in notes), notes
 
 
 def test_the_idle_speed_for_a_crank_speed_is_its_exact_root():
