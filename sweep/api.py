@@ -36,7 +36,7 @@ if TYPE_CHECKING:
     AtlasLike = xarray.Dataset | str | os.PathLike
 
 __all__ = ["Sweep", "UserError", "boundaries", "chart", "decode", "example", "examples",
-           "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
+           "explore", "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
            "query", "run", "warmup", "with_requirements"]
 
 #: an atlas computed in memory (``run`` without a path) may take at most this much
@@ -761,6 +761,53 @@ def pareto(atlas: AtlasLike, maximize: list[str] | str = (), minimize: list[str]
     if fig is not None:
         save_figure(fig, picture)
     return result
+
+
+def explore(atlas: AtlasLike, path: str | os.PathLike, *,
+            variables: list[str] | str | None = None, max_designs: int | None = None,
+            force: bool = False) -> Path:
+    """An atlas as one self-contained HTML page to explore offline (every script inlined).
+
+    A chart of any two variables coloured by any variable, the other grid axes held at
+    values set by menus ("all": every value); a scatter matrix where brushing a box, a
+    lasso or the ranges selects designs in every view; hover on a design for its
+    parameters and outputs with units; a table of the selected designs with a CSV
+    download; a front's picked design marked. Every design is shown up to ``max_designs``;
+    beyond, every k-th in grid order, which the page says.
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        path: the ``.html`` to write (an existing one only with ``force``; never the atlas).
+        variables: 2 to 4 numeric variables of the scatter matrix (a list or names
+            separated by commas); default: a front's objectives, the chart's colour and
+            overlay, then the outputs.
+        max_designs: designs shown at most (default ``sweep.explorer.MAX_DESIGNS``).
+        force: overwrite an existing page.
+
+    Returns:
+        The page's path.
+
+    Raises:
+        UserError: not an atlas, a variable it does not have, or a path that cannot be
+            written.
+    """
+    from sweep import explorer
+    from sweep.store import atomic, check_target
+
+    ds = _atlas(atlas)
+    target = path_argument(path, "path")
+    check_target(target, force, suffix=".html", inputs=input_files(atlas, ds))
+    names = [v.strip() for v in variables.split(",") if v.strip()] \
+        if isinstance(variables, str) else variables
+    if max_designs is None:
+        max_designs = explorer.MAX_DESIGNS
+    if isinstance(max_designs, bool) or not isinstance(max_designs, int) or max_designs < 1:
+        raise UserError(f"max_designs: a positive whole number, not {max_designs!r}")
+    with reading(ds):
+        text = explorer.page(ds, names, max_designs)
+    with atomic(target) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return target
 
 
 def write_selection(ds: xarray.Dataset, target: Path) -> None:

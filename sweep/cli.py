@@ -406,6 +406,31 @@ def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file,
     click.echo(f"chart: {Path(output).resolve()}")
 
 
+@cli.command(short_help="An atlas as one HTML page to explore offline, in the browser.",
+             epilog=_epilog("sweep explore limits.nc -o limits.html",
+                            "sweep explore front.nc -o front.html --vars blow_rate,force_peak_A"))
+@click.argument("atlas_file", metavar="ATLAS")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
+              help="the page (.html)")
+@click.option("--vars", "names", default=None,
+              help="2 to 4 numeric variables of the scatter matrix, comma-separated")
+@click.option("--max-designs", type=click.IntRange(1, None), default=None,
+              help="designs shown at most (beyond: every k-th in grid order, said on the "
+                   "page; default 100,000)")
+@click.option("--force", is_flag=True, help="overwrite an existing page")
+def explore(atlas_file, output, names, max_designs, force):
+    """One self-contained page (every script inlined, no network): a chart of any two
+    variables coloured by any other, a scatter matrix to brush designs in, hover for a
+    design's values, the selected designs as a table and CSV."""
+    from sweep.store import check_target
+
+    check_target(Path(output), force, suffix=".html", inputs=[atlas_file])
+    with api.open_atlas(atlas_file) as ds:
+        page = api.explore(ds, output, variables=names, max_designs=max_designs,
+                           force=force)
+    click.echo(f"explorer: {page.resolve()}")
+
+
 @cli.command(short_help="A chart of profiles (over the crank angle) at one grid point.",
              epilog=_epilog("sweep profile lf.nc --vars F21_n,F34_n,balancing_moment "
                             "--where 'omega1 == 30'",

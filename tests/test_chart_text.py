@@ -17,14 +17,20 @@ from sweep.charts import design_figure
 AXIS_VALUES = 4  # per grid axis: the chart's layout, not its resolution, is under test
 
 
-def small(name):
-    """The example's spec with every grid axis cut to AXIS_VALUES values, and its chart."""
+def small_example(name, values=AXIS_VALUES):
+    """A built-in example's spec with every grid axis cut to ``values`` values."""
     document = tomllib.loads(example_specs.text(name))
     for axis, entry in document["grid"].items():
         if isinstance(entry, dict) and "num" in entry:
-            entry["num"] = min(entry["num"], AXIS_VALUES)
+            entry["num"] = min(entry["num"], values)
         elif isinstance(entry, list):
-            document["grid"][axis] = entry[:AXIS_VALUES]
+            document["grid"][axis] = entry[:values]
+    return document
+
+
+def small(name):
+    """The example's spec with every grid axis cut to AXIS_VALUES values, and its chart."""
+    document = small_example(name)
     return document, document.pop("chart")
 
 
