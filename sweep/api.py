@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 
 __all__ = ["Sweep", "UserError", "boundaries", "chart", "decode", "example", "examples",
            "explore", "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
-           "query", "run", "warmup", "with_requirements"]
+           "query", "run", "sheet", "warmup", "with_requirements"]
 
 #: an atlas computed in memory (``run`` without a path) may take at most this much
 IN_MEMORY_LIMIT = 2 * 1024**3  # bytes
@@ -697,7 +697,8 @@ def pareto(atlas: AtlasLike, maximize: list[str] | str = (), minimize: list[str]
            where: str | None = None, require: list[str] | None = None, pick: str = "knee",
            weights: list[float] | None = None, path: str | os.PathLike | None = None,
            chart: str | os.PathLike | None = None, degrees: bool = True,
-           force: bool = False, tie_tol: float = 1e-9) -> Front:
+           force: bool = False, tie_tol: float = 1e-9,
+           sheet: str | os.PathLike | None = None) -> Front:
     """The Pareto front of an atlas's feasible designs, and the one a rule picks.
 
     A design is a candidate when its status is ``ok``, it meets the requirements and
@@ -719,6 +720,8 @@ def pareto(atlas: AtlasLike, maximize: list[str] | str = (), minimize: list[str]
         degrees: angles in degrees on the chart.
         force: overwrite existing files (never the atlas itself).
         tie_tol: objective values that agree to this relative tolerance are ties.
+        sheet: a design sheet (``.html``, and a PDF beside it where Chromium is installed)
+            of the picked design, its place drawn on this front (``sheet``).
 
     Returns:
         A ``Front``: ``front.designs`` (an xarray Dataset over ``design``, ``picked``
@@ -749,17 +752,25 @@ def pareto(atlas: AtlasLike, maximize: list[str] | str = (), minimize: list[str]
     if target is not None:
         check_target(target, force, inputs=input_files(atlas, ds))
     picture = _png(chart, force, atlas, ds, name="chart")
+    sheet_targets = None if sheet is None else _sheet_targets(sheet, True, force, atlas, ds)
     source = ds.encoding.get("source", "")
     with reading(ds):
         ds = with_requirements(ds, require)
         result = fronts.front(ds, maximize, minimize, where=where, pick=pick,
                               weights=weights, source=str(source), tie_tol=tie_tol)
         result.designs.load()
-        fig = None if picture is None else fronts.figure(ds, result, where, degrees)
+        fig = None if picture is None and sheet is None else \
+            fronts.figure(ds, result, where, degrees)
     if target is not None:
         write_selection(result.designs, target)
-    if fig is not None:
+    if picture is not None:
         save_figure(fig, picture)
+    if sheet_targets is not None:
+        from sweep import design_sheet as sheets
+
+        text = sheets.page(result.designs, {"design": int(result.picked)},
+                           front_png=sheets.figure_png(fig), source=str(source))
+        result.sheet = _write_sheet(text, *sheet_targets)
     return result
 
 
@@ -808,6 +819,63 @@ def explore(atlas: AtlasLike, path: str | os.PathLike, *,
     with atomic(target) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return target
+
+
+def sheet(atlas: AtlasLike, path: str | os.PathLike, *, design: int | None = None,
+          where: str | None = None, pdf: bool = True, force: bool = False
+          ) -> tuple[Path, Path | None]:
+    """One page for one design: its parameters and every output with unit and meaning,
+    the requirement margins, its place on the front (an atlas written by ``pareto``), its
+    profiles over the cycle where the atlas has them, and the provenance (spec, code and
+    package versions, date).
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        path: the ``.html`` to write (an existing one only with ``force``).
+        design: the design's grid point, its flat (C-order) index (as ``query`` lists it);
+            or
+        where: a condition; the first grid point that matches.
+        pdf: also print it to a PDF beside it (``PATH.pdf``) where the distribution's
+            Chromium is installed.
+        force: overwrite existing files (never the atlas).
+
+    Returns:
+        (the page, the PDF or None where no Chromium is installed).
+
+    Raises:
+        UserError: not an atlas, neither or both of design and where, a design out of
+            range, no match, or a path that cannot be written.
+    """
+    from sweep import design_sheet as sheets
+
+    ds = _atlas(atlas)
+    target, printed = _sheet_targets(path, pdf, force, atlas, ds)
+    with reading(ds):
+        at = sheets.point_of(ds, design, where)
+        text = sheets.page(ds, at, source=str(ds.encoding.get("source", "")))
+    return _write_sheet(text, target, printed)
+
+
+def _sheet_targets(path, pdf: bool, force: bool, *inputs) -> tuple[Path, Path | None]:
+    from sweep.store import check_target
+
+    target = path_argument(path, "sheet")
+    check_target(target, force, suffix=".html", inputs=input_files(*inputs))
+    printed = target.with_suffix(".pdf") if pdf else None
+    if printed is not None:
+        check_target(printed, force, suffix=".pdf", inputs=input_files(*inputs))
+    return target, printed
+
+
+def _write_sheet(text: str, target: Path, printed: Path | None) -> tuple[Path, Path | None]:
+    from sweep import design_sheet as sheets
+    from sweep.store import atomic
+
+    with atomic(target) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    if printed is not None and not sheets.print_pdf(target, printed):
+        printed = None
+    return target, printed
 
 
 def write_selection(ds: xarray.Dataset, target: Path) -> None:

@@ -659,14 +659,14 @@ def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path
 
 
 def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
-                   degrees: bool = True) -> tuple:
+                   degrees: bool = True, at: dict | None = None) -> tuple:
     """Profiles of ``names`` over the profile dimension at the first grid point matching
     ``where``, as (Figure, the grid point in words). One panel per unit, stacked over a
     shared angle axis (N and N m on one axis would flatten the smaller); where a profile
     spikes (1/dphi1 reactions) a symmetric-log y axis shows the spike and the rest of the
     cycle. Angles on both axes in degrees, or both in radians; the angle axis ticks every
     90° (or pi/2); the crank angles of special positions and impacts the atlas records are
-    marked."""
+    marked. ``at``: the grid point {dim: index} instead of ``where``."""
     from matplotlib.figure import Figure
 
     if not names:
@@ -679,11 +679,12 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
         if len(extra) != 1:
             raise UserError(f"variables: {name} is not a profile (it has no extra dimension)")
     pdim = [d for d in ds[names[0]].dims if d not in grid_dims][0]
-    mask = evaluate(ds, where).values if where else np.ones(ds["status"].shape, bool)
-    hits = np.argwhere(mask)
-    if not len(hits):
-        raise UserError("where: no grid point matches")
-    at = {d: int(i) for d, i in zip(grid_dims, hits[0])}
+    if at is None:
+        mask = evaluate(ds, where).values if where else np.ones(ds["status"].shape, bool)
+        hits = np.argwhere(mask)
+        if not len(hits):
+            raise UserError("where: no grid point matches")
+        at = {d: int(i) for d, i in zip(grid_dims, hits[0])}
     point = ds.isel(at)
     by_unit: dict[str, list[str]] = {}
     for name in names:

@@ -314,9 +314,12 @@ def _rows_text(frame, units: list[str], fmt: str) -> str:
               help="objective values that agree to this relative tolerance are ties")
 @click.option("--degrees", is_flag=True, help="print angles in degrees")
 @click.option("--format", "fmt", type=click.Choice(["table", "csv", "json"]), default="table")
+@click.option("--sheet", "sheet_path", type=click.Path(dir_okay=False), default=None,
+              help="a design sheet of the picked design (.html, and a PDF beside it where "
+                   "Chromium is installed)")
 @click.option("--force", is_flag=True, help="overwrite existing output files")
 def pareto(atlas_file, maximize, minimize, where, require, pick, weights, output, chart_path,
-           tie_tol, degrees, fmt, force):
+           tie_tol, degrees, fmt, sheet_path, force):
     """The non-dominated feasible designs (status ok, requirements met, --where) of any
     number of objectives, and the design a rule picks, printed with all its outputs."""
     import json
@@ -329,7 +332,7 @@ def pareto(atlas_file, maximize, minimize, where, require, pick, weights, output
                             require=list(require), pick=pick,
                             weights=None if weights is None else weights.split(","),
                             path=output, chart=chart_path, degrees=True, force=force,
-                            tie_tol=tie_tol)
+                            tie_tol=tie_tol, sheet=sheet_path)
     designs = result.designs
     dims = ["design"]
     columns = [c for c in designs.coords if designs[c].dims == ("design",)] + \
@@ -360,6 +363,41 @@ def pareto(atlas_file, maximize, minimize, where, require, pick, weights, output
     for label, target in (("front", output), ("chart", chart_path)):
         if target:
             click.echo(f"{label}: {Path(target).resolve()}")
+    if result.sheet is not None:
+        _said_sheet(*result.sheet)
+
+
+def _said_sheet(page: Path, printed: Path | None) -> None:
+    click.echo(f"sheet: {page.resolve()}")
+    click.echo(f"pdf: {printed.resolve()}" if printed is not None else
+               "pdf: not written: no Chromium (install Debian's chromium to print one)")
+
+
+@cli.command(short_help="One page for one design: parameters, outputs, margins, profiles.",
+             epilog=_epilog("sweep sheet limits.nc --design 1767 -o design.html",
+                            "sweep sheet front.nc --where 'picked == \"yes\"' -o pick.html"))
+@click.argument("atlas_file", metavar="ATLAS")
+@click.option("--design", type=int, default=None,
+              help="the design's grid point (its index, as `sweep query` lists it)")
+@click.option("--where", default=None, help="condition picking the design (first match)")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
+              help="the sheet (.html); a PDF is printed beside it")
+@click.option("--no-pdf", is_flag=True, help="the page only")
+@click.option("--force", is_flag=True, help="overwrite existing files")
+def sheet(atlas_file, design, where, output, no_pdf, force):
+    """A design sheet for a review or the workshop: the design's parameters and every output
+    with unit and meaning, the requirement margins, its place on a front, its profiles over
+    the cycle, the provenance; HTML, and PDF where the distribution's Chromium is
+    installed."""
+    from sweep.selection import parse
+    from sweep.store import check_target
+
+    check_target(Path(output), force, suffix=".html", inputs=[atlas_file])
+    if where is not None:
+        parse(where)
+    with api.open_atlas(atlas_file) as ds:
+        _said_sheet(*api.sheet(ds, output, design=design, where=where, pdf=not no_pdf,
+                               force=force))
 
 
 @cli.command(short_help="A design chart (PNG) of one output over two grid axes.",

@@ -70,6 +70,8 @@ class Front:
     picked: int
     rule: str
     candidates: int
+    #: the picked design's sheet (page, PDF or None) where one was asked for
+    sheet: tuple | None = None
 
     @property
     def picked_design(self) -> xr.Dataset:

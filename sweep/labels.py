@@ -107,6 +107,8 @@ def value_text(ds: xr.Dataset, name: str, value, degrees: bool = True,
     """``crank speed $\\omega_1$ = 60 rad/s``: a variable held at a value, as a title
     shows it (``plain``: ``omega1 = 60 rad/s``, as a terminal shows it)."""
     shown_name = str(name) if plain else label(ds, name)
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
     if isinstance(value, bytes):
         value = value.decode()
     if isinstance(value, (str, np.str_)):
