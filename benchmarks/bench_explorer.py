@@ -94,7 +94,7 @@ def main() -> None:
         "what": "sweep explore of a 99,960-point crank_rocker atlas (every design shown): "
                 "page size, CPU seconds of the whole `sweep explore` process, seconds from "
                 "navigation to the first frame in headless Chromium (network off)",
-        "designs": 99_960, "page_bytes": size,
+        "designs": 99_960, "page_bytes": size, "rounds": args.rounds,
         "write_cpu_s": write, "write_cpu_s_median": statistics.median(write),
         "first_render_s": render, "first_render_s_median": statistics.median(render),
         "machine": platform.machine(), "python": platform.python_version(),

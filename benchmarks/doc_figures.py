@@ -6,7 +6,9 @@ FOLDER holds the examples' atlases and charts as ``reference_atlases.py write FO
 ``sweep run`` of each example) leaves them; without it they are run here, in a temporary
 folder. Each example's chart (what ``sweep run`` draws from its [chart]) is copied into
 docs/ under the name the pages use, and the two profile charts are drawn with the same
-function as ``sweep profile``. The work-precision and failure charts are made by
+function as ``sweep profile``; the explorer's screenshot is the page of
+``crank_rocker_limits`` in headless Chromium with the designs of at least 20 J a blow
+brushed. The work-precision and failure charts are made by
 ``benchmarks/charts.py``.
 """
 
@@ -55,6 +57,28 @@ def main(folder: Path) -> None:
         with sweep.open_atlas(atlas_of(example, folder)) as atlas:
             sweep.profile(atlas, names, where, path=DOCS / name, force=True)
         print(f"docs/{name}: `sweep profile` of {example} at {where}")
+    explorer_screenshot(folder)
+
+
+def explorer_screenshot(folder: Path, name: str = "explorer.png") -> None:
+    """The README's explorer: the limits example's page with blow energy >= 20 J brushed."""
+    import time
+
+    from tests.browser import driver, ready
+
+    atlas = atlas_of("crank_rocker_limits", folder)
+    page = sweep.explore(atlas, folder / "crank_rocker_limits.html", force=True)
+    browser = driver(width=1500, height=1000)
+    try:
+        browser.get(page.as_uri())
+        ready(browser)
+        browser.execute_script(
+            "const r = model('range_blow_energy'); r.value = [20, r.end];")
+        time.sleep(1.0)
+        browser.save_screenshot(str(DOCS / name))
+    finally:
+        browser.quit()
+    print(f"docs/{name}: `sweep explore` of crank_rocker_limits, blow energy >= 20 J brushed")
 
 
 if __name__ == "__main__":

@@ -194,42 +194,18 @@ def cycle_profiles(w_plus, nd, m, core, angles, prof):
 
 
 @njit(**INNER_OPTIONS)
-def design(i, pr, settings, out, prof):
-    """One design (kernels/block.py): its status, its outputs written into out and its
-    profiles at settings.angles after the blow into prof (NaN where none)."""
-    r = pr[P.R]
-    law = int(pr[P.impact_law])
-    revolutions, start_mode, delta = (settings.max_revolutions, settings.start_mode,
-                                      settings.delta)
-    status, m, crank_own = design_data(pr, settings.geometry_tol)
-    if status != S.ok:
-        return status
-    core = CoreSettings(method=METHOD_DOPRI5, rtol=settings.tol, atol=settings.tol, dt=0.0,
-                        max_steps=10 ** 6, horizon=2.0 * math.pi + 1.0)
-    flywheel = pr[P.flywheel_inertia]
-    sized = flywheel == FOR_DELTA  # the flywheel a delta target asks for: sized first
-    target = pr[P.omega1]
-    if math.isfinite(target):  # the idle speed the mean crank speed asks for
-        found, idle = idle_for_speed(m, crank_own, flywheel, sized, r, law, core,
-                                     revolutions, start_mode, delta, target)
-        if found == MOTOR_UNREACHABLE:
-            return S.unreachable_speed
-        if found != MOTOR_FOUND:
-            return S.no_convergence
-        m = with_idle(m, idle)
-    out[O.idle_speed] = m.motor.idle_speed
-    flywheel = flywheel_at(m, crank_own, flywheel, sized, r, law, core, revolutions,
-                           start_mode, delta)
-    if not math.isfinite(flywheel):
-        return S.no_convergence
-    out[O.flywheel_inertia] = flywheel
-    out[O.flywheel_sizing] = (FLYWHEEL_GIVEN if not sized else
-                              FLYWHEEL_NOT_NEEDED if flywheel == 0.0 else FLYWHEEL_SIZED)
-    cycle, nd, m = solve(m, crank_own, flywheel, r, law, core, revolutions, start_mode)
-    out[O.revolutions], out[O.n_steps] = cycle.revolutions, cycle.steps
-    status = cycle_status(cycle)
-    if status != S.ok:
-        return status
+def finite_or(out, status):
+    """``status``, or nonfinite where an output is infinite."""
+    for k in range(out.shape[0]):
+        if math.isinf(out[k]):
+            return S.nonfinite
+    return status
+
+
+@njit(**INNER_OPTIONS)
+def steady_outputs(cycle, nd, m, r, law, out):
+    """The steady cycle's outputs into ``out``: speeds, impulses, the motor's torque and
+    power, the blow's energy, loss and its split, rate, restitution, the energy balance."""
     rev, b = cycle.rev, cycle.blow
     w_plus, w_minus, w_next = cycle.w_plus, rev.w_minus, b.w_plus
     u31m, u31p = nd.u31_before, nd.u31_after
@@ -242,7 +218,8 @@ def design(i, pr, settings, out, prof):
     out[O.tool_impulse] = b.impulse
     out[O.crank_impulse] = m.ja * (w_next - w_minus)
     w_low, w_high = min(rev.w_min, w_plus), max(rev.w_max, w_plus)
-    out[O.motor_torque_peak] = max(abs(motor_torque(w_low, m)), abs(motor_torque(w_high, m)))
+    out[O.motor_torque_peak] = max(abs(motor_torque(w_low, m)),
+                                   abs(motor_torque(w_high, m)))
     out[O.motor_torque_rms] = math.sqrt(rev.torque_squared / period)
     out[O.motor_power_mean] = rev.motor_work / period
     out[O.blow_energy] = 0.5 * m.masses.jd3 * (u31m * w_minus) ** 2
@@ -262,26 +239,75 @@ def design(i, pr, settings, out, prof):
     # revolution's steps keep W_motor + W_load = T_end - T_start exactly: with it the
     # balance holds whatever the integration error)
     out[O.energy_balance_residual] = (rev.motor_work - b.loss) / b.loss
-    if settings.angles.shape[0]:
-        cycle_profiles(w_plus, nd, m, core, settings.angles, prof)
-    if settings.peaks:
-        peaks = np.empty(ks.N_PEAKS)
-        dynamic_force_peaks(w_plus, nd, m, linkage_forces_parameters(pr, m), core,
-                            settings.window, settings.peak_samples, peaks)
-        out[O.dynamic_force_peak_A], out[O.dynamic_force_peak_B] = peaks[ks.PEAK_A], \
-            peaks[ks.PEAK_B]
-        out[O.dynamic_force_peak_C], out[O.dynamic_force_peak_D] = peaks[ks.PEAK_C], \
-            peaks[ks.PEAK_D]
-    if settings.flywheels:
-        guess = classical_flywheel(nd, r, m, crank_own, delta, 2.0 * math.pi / period)
-        out[O.flywheel_for_delta_classical] = guess if law == LAW_GENERALIZED else math.nan
-        if law == LAW_GENERALIZED and math.isfinite(guess):
-            out[O.flywheel_for_delta] = exact_flywheel(m, crank_own, r, law, core,
-                                                       revolutions, start_mode, delta, guess)
-    for k in range(out.shape[0]):
-        if math.isinf(out[k]):
-            return S.nonfinite
-    return S.ok
+
+
+def design_of(full):
+    """One design (kernels/block.py): its status, its outputs written into out and its
+    profiles at settings.angles after the blow into prof (NaN where none). ``full``: with
+    what a run may ask beyond the steady cycle (the idle speed for a crank speed, a
+    flywheel sized for delta, profiles, dynamic force peaks, the flywheels for delta); a
+    run that asks none of them compiles without them, a third less (numba prunes the
+    branches on the constant)."""
+
+    @njit(**INNER_OPTIONS)
+    def design(i, pr, settings, out, prof):
+        r = pr[P.R]
+        law = int(pr[P.impact_law])
+        revolutions, start_mode, delta = (settings.max_revolutions, settings.start_mode,
+                                          settings.delta)
+        status, m, crank_own = design_data(pr, settings.geometry_tol)
+        if status != S.ok:
+            return status
+        core = CoreSettings(method=METHOD_DOPRI5, rtol=settings.tol, atol=settings.tol,
+                            dt=0.0, max_steps=10 ** 6, horizon=2.0 * math.pi + 1.0)
+        flywheel = pr[P.flywheel_inertia]
+        sized = flywheel == FOR_DELTA  # the flywheel a delta target asks for: sized first
+        if full:
+            target = pr[P.omega1]
+            if math.isfinite(target):  # the idle speed the mean crank speed asks for
+                found, idle = idle_for_speed(m, crank_own, flywheel, sized, r, law, core,
+                                             revolutions, start_mode, delta, target)
+                if found == MOTOR_UNREACHABLE:
+                    return S.unreachable_speed
+                if found != MOTOR_FOUND:
+                    return S.no_convergence
+                m = with_idle(m, idle)
+            flywheel = flywheel_at(m, crank_own, flywheel, sized, r, law, core,
+                                   revolutions, start_mode, delta)
+        out[O.idle_speed] = m.motor.idle_speed
+        if not math.isfinite(flywheel):
+            return S.no_convergence
+        out[O.flywheel_inertia] = flywheel
+        out[O.flywheel_sizing] = (FLYWHEEL_GIVEN if not sized else
+                                  FLYWHEEL_NOT_NEEDED if flywheel == 0.0 else FLYWHEEL_SIZED)
+        cycle, nd, m = solve(m, crank_own, flywheel, r, law, core, revolutions, start_mode)
+        out[O.revolutions], out[O.n_steps] = cycle.revolutions, cycle.steps
+        status = cycle_status(cycle)
+        if status != S.ok:
+            return status
+        steady_outputs(cycle, nd, m, r, law, out)
+        w_plus, period = cycle.w_plus, cycle.rev.period
+        if full:  # what a run may ask beyond the steady cycle
+            if settings.angles.shape[0]:
+                cycle_profiles(w_plus, nd, m, core, settings.angles, prof)
+            if settings.peaks:
+                peaks = np.empty(ks.N_PEAKS)
+                dynamic_force_peaks(w_plus, nd, m, linkage_forces_parameters(pr, m), core,
+                                    settings.window, settings.peak_samples, peaks)
+                out[O.dynamic_force_peak_A], out[O.dynamic_force_peak_B] = peaks[ks.PEAK_A], \
+                    peaks[ks.PEAK_B]
+                out[O.dynamic_force_peak_C], out[O.dynamic_force_peak_D] = peaks[ks.PEAK_C], \
+                    peaks[ks.PEAK_D]
+            if settings.flywheels:
+                guess = classical_flywheel(nd, r, m, crank_own, delta, 2.0 * math.pi / period)
+                out[O.flywheel_for_delta_classical] = \
+                    guess if law == LAW_GENERALIZED else math.nan
+                if law == LAW_GENERALIZED and math.isfinite(guess):
+                    out[O.flywheel_for_delta] = exact_flywheel(
+                        m, crank_own, r, law, core, revolutions, start_mode, delta, guess)
+        return finite_or(out, S.ok)
+
+    return design
 
 
 #: the method's options the block reads, by name (flywheels and peaks: whether those
@@ -289,8 +315,23 @@ def design(i, pr, settings, out, prof):
 Settings = namedtuple("Settings", ["geometry_tol", "tol", "max_revolutions", "start_mode",
                                    "delta", "flywheels", "peaks", "window", "peak_samples",
                                    "angles"])
-#: the block: each design of it by ``design`` (kernels/block.py), cached on disk
-machine_block = module_level(each_design(design), "machine_block", globals(), KERNEL_OPTIONS)
+#: the blocks: each design of it by ``design_of(full)`` (kernels/block.py), cached on disk;
+#: the lean one where a run asks nothing beyond the steady cycle
+machine_block = module_level(each_design(design_of(True)), "machine_block", globals(),
+                             KERNEL_OPTIONS)
+lean_machine_block = module_level(each_design(design_of(False)), "lean_machine_block",
+                                  globals(), KERNEL_OPTIONS)
+
+
+def needs_full(params, method, angles) -> bool:
+    """Whether a run asks anything of the full block: a crank speed to solve the motor's
+    idle speed for, a flywheel sized for delta, profiles, dynamic force peaks or the
+    flywheels for delta."""
+    return bool(np.isfinite(params[P.omega1]).any() or (params[P.flywheel_inertia]
+                                                        == FOR_DELTA).any()
+                or angles.shape[0] or any(name.startswith("dynamic_force_peak")
+                                          or name.startswith("flywheel_for_delta")
+                                          for name in method.outputs))
 
 
 def run(params, method):
@@ -309,5 +350,6 @@ def run(params, method):
         peaks=any(name.startswith("dynamic_force_peak") for name in method.outputs),
         window=float(method.special_window), peak_samples=int(method.peak_samples),
         angles=angles)
-    machine_block(np.ascontiguousarray(params), settings, out, status, prof)
+    block = machine_block if needs_full(params, method, angles) else lean_machine_block
+    block(np.ascontiguousarray(params), settings, out, status, prof)
     return out, status, prof

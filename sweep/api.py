@@ -505,7 +505,8 @@ def chart(atlas: AtlasLike, x: str, y: str, color: str, *, path: str | os.PathLi
           at: Mapping[str, Any] | None = None, degrees: bool = True,
           all_status: bool = False, boundaries: Any = None,
           overlay: str | None = None, force: bool = False,
-          require: list[str] | None = None) -> Figure:
+          require: list[str] | None = None, ax: Any = None, cmap: str | None = None,
+          figsize: tuple[float, float] | None = None) -> Figure:
     """A design chart of one variable over two grid axes.
 
     A numeric output is a colour map with contour lines; a flag (``regime``, ``status``)
@@ -527,9 +528,15 @@ def chart(atlas: AtlasLike, x: str, y: str, color: str, *, path: str | os.PathLi
         overlay: a numeric output drawn as labelled contour lines on top.
         force: overwrite an existing PNG (never the atlas itself).
         require: limits evaluated into the ``requirements`` flag, e.g. to colour by it.
+        ax: draw into these matplotlib axes (one panel: hold a third grid axis with
+            ``at``), e.g. beside the user's own plots; the colour bar or legend goes
+            beside them, the title is left to the user.
+        cmap: a matplotlib colour map's name for a numeric colour variable (a flag keeps
+            its meaning's colours).
+        figsize: (width, height) of a new figure in inches.
 
     Returns:
-        The ``matplotlib.figure.Figure``.
+        The ``matplotlib.figure.Figure`` (the one ``ax`` belongs to, where given).
 
     Raises:
         UserError: a variable or axis the atlas does not have, or a path that cannot be
@@ -539,16 +546,40 @@ def chart(atlas: AtlasLike, x: str, y: str, color: str, *, path: str | os.PathLi
     from sweep.selection import at_values
 
     ds = _atlas(atlas)
+    _drawing_options(ax, cmap, figsize)
     out = _png(path, force, ds, boundaries)
     if isinstance(boundaries, (str, os.PathLike)):
         boundaries = open_boundaries(boundaries)
     with reading(ds):
         ds = with_requirements(ds, require)
         fig = design_figure(ds, x, y, color, ok_only=not all_status, degrees=degrees,
-                            at=at_values(at), boundaries=boundaries, overlay=overlay)
+                            at=at_values(at), boundaries=boundaries, overlay=overlay,
+                            ax=ax, cmap=cmap, figsize=figsize)
     if out is not None:
         save_figure(fig, out)
     return fig
+
+
+def _drawing_options(ax, cmap, figsize) -> None:
+    """The chart's matplotlib options checked: a UserError naming the argument."""
+    import numbers
+
+    import matplotlib
+    from matplotlib.axes import Axes
+
+    if ax is not None and not isinstance(ax, Axes):
+        raise UserError(f"ax: a matplotlib Axes, not {type(ax).__name__}")
+    if cmap is not None and (not isinstance(cmap, str) or cmap not in matplotlib.colormaps):
+        raise UserError(f"cmap: {cmap!r} is not a matplotlib colour map's name; e.g. "
+                        "'viridis', 'cividis', 'RdBu_r'")
+    if figsize is not None:
+        if ax is not None:
+            raise UserError("figsize: the figure is ax's; give figsize or ax, not both")
+        if not (isinstance(figsize, (tuple, list)) and len(figsize) == 2 and all(
+                isinstance(v, numbers.Real) and not isinstance(v, bool) and 0 < v <= 100
+                for v in figsize)):
+            raise UserError(f"figsize: (width, height) in inches, each in (0, 100], not "
+                            f"{figsize!r}")
 
 
 def profile(atlas: AtlasLike, variables: list[str] | str, where: str | None = None, *,

@@ -40,7 +40,6 @@ def table(ds: xr.Dataset, max_designs: int = MAX_DESIGNS):
     (columns {name: values as shown}, meta {name: label, units, kind, ...}, step k,
     number of grid points). Angles in degrees, flags as their meanings."""
     from sweep import labels
-    from sweep.api import decode
     from sweep.palettes import CATEGORY_COLOURS, flag_colours
     from sweep.selection import flag_names
 
@@ -50,7 +49,6 @@ def table(ds: xr.Dataset, max_designs: int = MAX_DESIGNS):
     step = max(1, math.ceil(total / max_designs))
     keep = np.arange(0, total, step)
     index = np.unravel_index(keep, shape)
-    words = decode(ds)
     columns, meta = {ROW: keep.astype(np.int64)}, {ROW: {
         "label": "grid point", "units": "", "kind": "number", "axis": False}}
     names = dims + [str(n) for n in ds.variables if str(n) not in dims]
@@ -64,8 +62,7 @@ def table(ds: xr.Dataset, max_designs: int = MAX_DESIGNS):
                 "units": labels.pretty_units(labels.units(ds, name, True))}
         if "flag_meanings" in var.attrs:
             meanings = flag_names(var)
-            shown = words[name].broadcast_like(ds["status"]).transpose(*dims) \
-                .values.ravel()[keep]
+            shown = [meanings.get(int(code), "") for code in flat]
             colours = flag_colours(name, meanings)
             order = sorted(meanings)
             item.update(kind="category", categories=[meanings[c] for c in order],

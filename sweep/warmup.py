@@ -117,10 +117,18 @@ def pendulum_system_jobs() -> list[Job]:
             for s in SYSTEMS]
 
 
+def machine_full_job() -> Job:
+    """The impact machine's full block (kernels/impact_machine.py: a crank speed to size
+    the motor for, profiles, force peaks, flywheels for delta), which its example, asking
+    none of them, does not compile: a chained machine's first run needs it."""
+    return Job("impact_machine at a given crank speed", "sweep.warmup:compile_spec",
+               ('mechanism = "impact_machine"\n[grid]\nomega1 = [20.0]\n',))
+
+
 def mechanism_jobs(mechanisms: Sequence[str] | None = None) -> list[Job]:
     """What ``sweep warmup`` compiles for these mechanisms (default: every one): each
-    built-in example of them and, for the rotary pendulum, each system under the default
-    method; the pendulum's first (its compiles are the longest)."""
+    built-in example of them, for the rotary pendulum each system under the default
+    method, for the impact machine its full block; the longest first."""
     from sweep import example_specs, registry
 
     known = sorted(registry.MECHANISMS)
@@ -132,6 +140,7 @@ def mechanism_jobs(mechanisms: Sequence[str] | None = None) -> list[Job]:
     of_example = example_specs.mechanisms()
     jobs = pendulum_system_jobs() if "rotary_pendulum" in chosen else []
     pendulum_first = sorted(of_example, key=lambda n: of_example[n] != "rotary_pendulum")
+    jobs += [machine_full_job()] if "impact_machine" in chosen else []
     return jobs + example_jobs(n for n in pendulum_first if of_example[n] in chosen)
 
 

@@ -134,3 +134,29 @@ def test_a_signed_output_is_drawn_on_a_diverging_map_centred_on_zero():
     centred = [n for n in norms if isinstance(n, TwoSlopeNorm)]
     assert centred and all(n.vcenter == 0.0 for n in centred)
     assert not [n for n in norms if type(n) is Normalize]
+
+
+def test_a_chart_draws_into_the_users_axes_with_their_colour_map():
+    """sweep.chart(..., ax=, cmap=, figsize=): the design chart in a panel of the user's
+    own figure (the mesh on their axes, the colours of their map), or a new figure of
+    their size; a wrong option is a UserError naming it."""
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    atlas = sweep.run({"mechanism": "crank_rocker",
+                       "grid": {"R": [0.1, 0.2, 0.3], "largest_link": [2.0, 3.0, 4.0]}})
+    fig = Figure()
+    left, right = fig.subplots(1, 2)
+    left.plot([0, 1], [0, 1])
+    drawn = sweep.chart(atlas, "R", "largest_link", "impact_speed", ax=right, cmap="cividis")
+    assert drawn is fig and right.collections and not left.collections
+    meshes = [c for c in right.collections if hasattr(c, "get_cmap")]
+    assert any(c.get_cmap().name == "cividis" for c in meshes)
+    sized = sweep.chart(atlas, "R", "largest_link", "impact_speed", figsize=(5.0, 3.5))
+    assert tuple(sized.get_size_inches()) == (5.0, 3.5)
+    for kwargs, match in (({"cmap": "no_such_map"}, "cmap"), ({"ax": "left"}, "ax: a matplotlib"),
+                          ({"figsize": (0, 3)}, "figsize"),
+                          ({"ax": right, "figsize": (3, 3)}, "figsize")):
+        with pytest.raises(sweep.UserError, match=match):
+            sweep.chart(atlas, "R", "largest_link", "impact_speed", **kwargs)
+    assert isinstance(matplotlib.colormaps["cividis"], matplotlib.colors.Colormap)

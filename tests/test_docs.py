@@ -111,7 +111,7 @@ def test_the_readme_is_a_front_door():
 #: the walk-throughs a reader follows, in the order the manual gives them: the README's
 #: tour, the tutorial, then the guides in the navigation's order
 WALK_THROUGHS = ["README.md", "docs/tutorial.md", "docs/guide/cli.md", "docs/guide/specs.md",
-                 "docs/guide/boundaries.md", "docs/guide/deciding.md",
+                 "docs/guide/boundaries.md", "docs/guide/deciding.md", "docs/guide/reading.md",
                  *(f"docs/guide/{m}.md" for m in ("crank_rocker", "linkage_forces", "six_link",
                                                    "spring_balancer", "rotary_pendulum",
                                                    "impact_machine"))]
@@ -131,5 +131,7 @@ def test_the_walk_throughs_run_in_sequence_in_one_folder(tmp_path):
     run_blocks(blocks, tmp_path, no_overwrite=True)
     for name in ("speed.png", "rp.bounds.nc", "transfer.png", "cr_chart.png", "breaker.nc",
                  "breaker_forces.nc", "breaker_front.nc", "breaker_front.png",
-                 "breaker_pick.nc", "breaker_pick.png"):
+                 "breaker_pick.nc", "breaker_pick.png", "limits.html", "pick.html",
+                 "breaker.html", "breaker_sheet.html", "breaker_sheet.pdf",
+                 "breaker_pick_sheet.html", "breaker_explorer.html"):
         assert (tmp_path / name).is_file(), name

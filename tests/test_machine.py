@@ -486,3 +486,27 @@ def test_bad_machine_input_is_one_line_before_compute(document, field):
     with pytest.raises(sweep.UserError) as err:
         sweep.Sweep.from_dict({"mechanism": "impact_machine", **document})
     assert str(err.value).startswith(field)
+
+
+def test_the_lean_block_gives_the_full_blocks_values_bit_for_bit():
+    """A run that asks nothing beyond the steady cycle compiles the lean block
+    (kernels/impact_machine.py); asking profiles runs the full one. At random designs
+    (material, flywheel, striker, speed) every output both compute is the same to the
+    last bit, and the full block adds the profiles."""
+    rng = np.random.default_rng(63)
+    grid = {"R": sorted(rng.uniform(0.05, 0.6, 3).round(4).tolist()),
+            "flywheel_inertia": sorted(rng.uniform(0.5, 40.0, 2).round(3).tolist()),
+            "m3": sorted(rng.uniform(2.0, 12.0, 2).round(3).tolist())}
+    fixed = {"idle_speed": round(float(rng.uniform(25.0, 60.0)), 3)}
+    lean = sweep.run({"mechanism": "impact_machine", "grid": grid, "fixed": fixed})
+    full = sweep.run({"mechanism": "impact_machine", "grid": grid, "fixed": fixed,
+                      "method": {"profile_points": 7}})
+    plain = np.zeros((len(M.P), 1))
+    plain[M.P.omega1] = np.nan  # the idle speed given, not a crank speed
+    asked = type("Method", (), {"outputs": ("blow_energy",)})
+    assert not M.needs_full(plain, asked, np.empty(0))
+    assert M.needs_full(plain, asked, np.ones(3))
+    assert (lean.status.values == 0).sum() >= 6
+    for name in lean.data_vars:
+        assert np.array_equal(lean[name].values, full[name].values, equal_nan=True), name
+    assert set(full.data_vars) - set(lean.data_vars)

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numba
 
-from sweep.warmup import Job, cores, example_jobs, run_jobs
+from sweep.warmup import Job, cores, example_jobs, machine_full_job, run_jobs
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -134,7 +134,7 @@ def _examples():
 def jobs(slow: bool) -> list[Job]:
     """The warm-up of the fast loop, or of the whole suite: the longest first."""
     selected = _entry_jobs(FAST_ENTRY_POINTS + (SLOW_ENTRY_POINTS if slow else ()))
-    return (selected + _examples() + _probe_jobs()
+    return (selected + [machine_full_job()] + _examples() + _probe_jobs()
             + [Job("joint forces", "tests.warmup:joint_forces")])
 
 
