@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 
 __all__ = ["Sweep", "UserError", "boundaries", "chart", "decode", "example", "examples",
            "explore", "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
-           "query", "run", "sheet", "warmup", "with_requirements"]
+           "query", "run", "sensitivity", "sheet", "warmup", "with_requirements"]
 
 #: an atlas computed in memory (``run`` without a path) may take at most this much
 IN_MEMORY_LIMIT = 2 * 1024**3  # bytes
@@ -907,6 +907,70 @@ def _write_sheet(text: str, target: Path, printed: Path | None) -> tuple[Path, P
     if printed is not None and not sheets.print_pdf(target, printed):
         printed = None
     return target, printed
+
+
+def sensitivity(spec: Sweep | Mapping | str | os.PathLike,
+                inputs: Mapping[str, Any] | None = None, outputs: list[str] | None = None,
+                *, samples: int = 1024, seed: int = 0, path: str | os.PathLike | None = None,
+                chart: str | os.PathLike | None = None, force: bool = False,
+                workers: int | None = None) -> xarray.Dataset:
+    """Variance-based sensitivity of outputs to inputs, with failed and infeasible designs
+    counted (``sweep.sensitivity_study``: the method in full).
+
+    Parameters:
+        spec: the study's base (a Sweep, a dict or a TOML file): its mechanism, fixed
+            parameters, method, outputs and requirements; without ``inputs``, its grid axes
+            are the inputs, each uniform between its least and greatest value.
+        inputs: {parameter: (low, high)} (uniform) or {parameter: (distribution,
+            numbers...)} with SALib's distributions: ``("norm", mean, sd)``,
+            ``("triang", low, high, mode)``, ``("lognorm", mu, sigma)``,
+            ``("truncnorm", low, high, mean, sd)``; values in the atlas's units (SI,
+            radians).
+        outputs: the outputs to apportion (default: the spec's numeric outputs).
+        samples: base samples, a power of two; the kernel runs samples x (inputs + 2).
+        seed: the scrambling's and the bootstrap's seed (the same seed, the same result).
+        path: a ``.nc`` to write the result to; chart: a PNG of the indices.
+        force: overwrite existing files.
+        workers: threads (default: every core).
+
+    Returns:
+        An ``xarray.Dataset`` over (quantity, input): ``first_order``, ``total`` and their
+        confidence half-widths for every output (where it exists) and for the indicator
+        of every status met and of meeting the requirements; ``probability`` of each of
+        those events with its Wilson interval.
+
+    Raises:
+        UserError: an input that is not a parameter, a band outside its domain, a
+            categorical input, a sample too large, or a path that cannot be written.
+    """
+    from sweep import sensitivity_study as sens
+    from sweep.spec import Sweep, load
+
+    if isinstance(spec, Sweep):
+        document = spec.source
+    elif isinstance(spec, Mapping):
+        document = dict(spec)
+    elif isinstance(spec, (str, os.PathLike)):
+        document = load(spec).source
+    else:
+        raise UserError(f"spec: a Sweep, a dict or the path of a TOML file, not "
+                        f"{type(spec).__name__}")
+    target = None if path is None else path_argument(path, "path")
+    if target is not None:
+        from sweep.store import check_target
+
+        check_target(target, force, inputs=input_files(spec))
+    picture = _png(chart, force, spec, name="chart")
+    result = sens.study(document, None if inputs is None else dict(inputs), outputs,
+                        samples, seed, workers)
+    if target is not None:
+        from sweep.store import atomic
+
+        with atomic(target) as tmp:
+            result.to_netcdf(tmp, engine="netcdf4")
+    if picture is not None:
+        save_figure(sens.figure(result), picture)
+    return result
 
 
 def write_selection(ds: xarray.Dataset, target: Path) -> None:

@@ -444,6 +444,47 @@ def chart(atlas_file, x, y, color, output, all_status, at, radians, bounds_file,
     click.echo(f"chart: {Path(output).resolve()}")
 
 
+@cli.command(short_help="Sobol' indices of outputs to inputs, failed designs counted.",
+             epilog=_epilog("sweep sensitivity study.toml -o study.nc --chart study.png",
+                            "sweep sensitivity study.toml --samples 4096 --outputs blow_rate"))
+@click.argument("spec_file", metavar="SPEC")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
+              help="the result (.nc)")
+@click.option("--chart", "chart_path", type=click.Path(dir_okay=False), default=None,
+              help="bars of the indices with their intervals (.png)")
+@click.option("--samples", type=int, default=1024, show_default=True,
+              help="base samples, a power of two (the kernel runs samples x (inputs + 2))")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--outputs", "names", default=None, help="outputs, comma-separated")
+@click.option("--workers", type=click.IntRange(1, 1024), help="threads (default: all cores)")
+@click.option("--force", is_flag=True, help="overwrite existing files")
+def sensitivity(spec_file, output, chart_path, samples, seed, names, workers, force):
+    """The spec's grid axes are the inputs, each uniform over its range; its fixed
+    parameters, method, outputs and requirements are the study's. Prints the indices and
+    the probability of each status and of meeting the requirements."""
+    result = api.sensitivity(spec_file, None,
+                             None if names is None else [n for n in names.split(",") if n],
+                             samples=samples, seed=seed, path=output, chart=chart_path,
+                             force=force, workers=workers)
+    click.echo(f"{result.attrs['evaluations']:,} designs ({result.attrs['samples']:,} base "
+               f"samples); {result.attrs['method']}")
+    inputs = list(result.input.values)
+    width = max(len(str(q)) for q in result.quantity.values)
+    click.echo(f"{'':<{width}}  " + "  ".join(f"{n:>22}" for n in inputs))
+    for q in result.quantity.values:
+        row = result.sel(quantity=q)
+        cells = [f"S1 {a:5.2f}±{b:4.2f} ST {c:5.2f}" for a, b, c in zip(
+            row.first_order.values, row.first_order_conf.values, row.total.values)]
+        click.echo(f"{str(q):<{width}}  " + "  ".join(f"{c:>22}" for c in cells))
+    for event, p, low, high in zip(result.event.values, result.probability.values,
+                                   result.probability_low.values,
+                                   result.probability_high.values):
+        click.echo(f"P({event}) = {p:.4f} [{low:.4f}, {high:.4f}]")
+    for label, target in (("result", output), ("chart", chart_path)):
+        if target:
+            click.echo(f"{label}: {Path(target).resolve()}")
+
+
 @cli.command(short_help="An atlas as one HTML page to explore offline, in the browser.",
              epilog=_epilog("sweep explore limits.nc -o limits.html",
                             "sweep explore front.nc -o front.html --vars blow_rate,force_peak_A"))
