@@ -37,7 +37,8 @@ if TYPE_CHECKING:
 
 __all__ = ["Sweep", "UserError", "boundaries", "chart", "decode", "example", "examples",
            "explore", "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
-           "query", "run", "sensitivity", "sheet", "warmup", "with_requirements"]
+           "query", "run", "sensitivity", "sheet", "tolerance", "design_spec", "warmup",
+           "with_requirements"]
 
 #: an atlas computed in memory (``run`` without a path) may take at most this much
 IN_MEMORY_LIMIT = 2 * 1024**3  # bytes
@@ -970,6 +971,94 @@ def sensitivity(spec: Sweep | Mapping | str | os.PathLike,
             result.to_netcdf(tmp, engine="netcdf4")
     if picture is not None:
         save_figure(sens.figure(result), picture)
+    return result
+
+
+def design_spec(atlas: AtlasLike, *, design: int | None = None,
+                where: str | None = None) -> dict:
+    """The spec (a dict, as ``Sweep.from_dict`` takes it) of one design of an atlas, as
+    built: its recorded fixed values, its grid axes' and a chain's values at the design,
+    an inverted input replaced by the value it gave (``envelope`` by ``crank_length``),
+    a synthesised crank-rocker by the four-bar it gave (type ``general``). Running it
+    gives the atlas's values at that design.
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        design: the design's grid point, its flat (C-order) index; or
+        where: a condition; the first grid point that matches.
+
+    Returns:
+        The spec document of one design (a one-point grid).
+
+    Raises:
+        UserError: not an atlas, neither or both of design and where, a design out of
+            range, or no match.
+    """
+    from sweep import design_sheet, tolerance_study
+
+    ds = _atlas(atlas)
+    with reading(ds):
+        return tolerance_study.design_spec(ds, design_sheet.point_of(ds, design, where))
+
+
+def tolerance(design: Sweep | Mapping | str | os.PathLike, tolerances: Mapping[str, Any], *,
+              method: Mapping[str, Any] | None = None,
+              samples: int = 4096, seed: int = 0, path: str | os.PathLike | None = None,
+              chart: str | os.PathLike | None = None, force: bool = False,
+              workers: int | None = None) -> xarray.Dataset:
+    """One design under workshop tolerances and a material band: the distribution of its
+    outputs and statuses (``sweep.tolerance_study``: the method in full).
+
+    Parameters:
+        design: the design's spec, one point (a dict, a TOML file or a Sweep;
+            ``design_spec`` makes one from an atlas).
+        tolerances: {parameter: +-value in its units (``1e-4``: a length +-0.1 mm),
+            ``"5%"`` (relative) or ``(low, high)`` (a band, e.g. the material's R)}.
+        method: method options replacing the design's, e.g. ``{"geometry_tol": 1e-3}``:
+            linkages within that relative band of a change point are modelled as exact
+            change points (a special position's condition is exact; a workshop's is not).
+        samples: a power of two; seed: the scrambling's seed.
+        path: a ``.nc`` for the result; chart: a PNG of the spreads.
+        force: overwrite existing files; workers: threads (default: every core).
+
+    Returns:
+        An ``xarray.Dataset``: ``quantiles`` of every output where it exists, its
+        ``nominal`` value, ``samples_with_value``, and the ``probability`` of each status
+        and of meeting the requirements with Wilson intervals.
+
+    Raises:
+        UserError: a tolerance on a parameter the mechanism does not take or that is
+            categorical, a band outside the parameter's domain, a design of more than one
+            point, a sample too large, or a path that cannot be written.
+    """
+    from sweep import tolerance_study
+    from sweep.spec import Sweep, load
+    from sweep.store import atomic, check_target
+
+    if isinstance(design, Sweep):
+        document = design.source
+    elif isinstance(design, Mapping):
+        document = dict(design)
+    elif isinstance(design, (str, os.PathLike)):
+        document = load(design).source
+    else:
+        raise UserError(f"design: a spec of one design (dict, TOML file or Sweep), not "
+                        f"{type(design).__name__}")
+    if method:
+        if not isinstance(method, Mapping):
+            raise UserError("method: a dict of method options, e.g. {'geometry_tol': 1e-3}")
+        document["method"] = {**(document.get("method") or {}), **dict(method)}
+    target = None if path is None else path_argument(path, "path")
+    if target is not None:
+        check_target(target, force, inputs=input_files(design))
+    picture = _png(chart, force, design, name="chart")
+    result = tolerance_study.study(document, dict(tolerances) if isinstance(
+        tolerances, Mapping) else tolerances, samples, seed, workers)
+    if target is not None:
+        with atomic(target) as tmp:
+            result.to_netcdf(tmp, engine="netcdf4")
+    if picture is not None:
+        save_figure(tolerance_study.figure(result), picture)
     return result
 
 

@@ -485,6 +485,88 @@ def sensitivity(spec_file, output, chart_path, samples, seed, names, workers, fo
             click.echo(f"{label}: {Path(target).resolve()}")
 
 
+@cli.command(short_help="One design under tolerances: its outputs' spread, its statuses.",
+             epilog=_epilog("sweep tolerance front.nc --where 'picked == \"yes\"' "
+                            "--tol crank_length=1e-4 --tol rocker_inertia=5% -o tol.nc",
+                            "sweep tolerance design.toml --tol R=0.05:0.3 --chart tol.png"))
+@click.argument("source", metavar="ATLAS|SPEC")
+@click.option("--design", type=int, default=None,
+              help="an atlas's design: its grid point (as `sweep query` lists it)")
+@click.option("--where", default=None, help="an atlas's design: the first that matches")
+@click.option("--tol", "tolerances", multiple=True, metavar="NAME=VALUE", required=True,
+              help="+-VALUE in the parameter's units, N%, or LOW:HIGH (repeat for more)")
+@click.option("--method", "methods", multiple=True, metavar="KEY=VALUE",
+              help="a method option replacing the design's, e.g. geometry_tol=1e-3 (a "
+                   "linkage that near a change point modelled as one)")
+@click.option("--samples", type=int, default=4096, show_default=True,
+              help="a power of two")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
+              help="the result (.nc)")
+@click.option("--chart", "chart_path", type=click.Path(dir_okay=False), default=None,
+              help="the spreads and the statuses' shares (.png)")
+@click.option("--workers", type=click.IntRange(1, 1024), help="threads (default: all cores)")
+@click.option("--force", is_flag=True, help="overwrite existing files")
+def tolerance(source, design, where, tolerances, methods, samples, seed, output, chart_path,
+              workers, force):
+    """The design (an atlas's, by --design or --where, or a spec of one point) built to the
+    tolerances: each output's quantiles where it exists and the share of each status."""
+    parsed = {}
+    for item in tolerances:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise UserError(f"--tol: NAME=VALUE, not {item!r}")
+        if ":" in value:
+            low, _, high = value.partition(":")
+            try:
+                parsed[name] = (float(low), float(high))
+            except ValueError:
+                raise UserError(f"--tol {name}: LOW:HIGH numbers, not {value!r}") from None
+        elif value.endswith("%"):
+            parsed[name] = value
+        else:
+            try:
+                parsed[name] = float(value)
+            except ValueError:
+                raise UserError(f"--tol {name}: a number, N% or LOW:HIGH, not "
+                                f"{value!r}") from None
+    if source.endswith(".nc"):
+        spec_of = api.design_spec(source, design=design, where=where)
+    else:
+        if design is not None or where is not None:
+            raise UserError("--design/--where: pick a design of an atlas; a spec is one "
+                            "design already")
+        spec_of = source
+    method = {}
+    for item in methods:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise UserError(f"--method: KEY=VALUE, not {item!r}")
+        try:
+            method[key] = int(value) if value.lstrip("-").isdigit() else float(value)
+        except ValueError:
+            method[key] = value
+    result = api.tolerance(spec_of, parsed, method=method, samples=samples, seed=seed,
+                           path=output, chart=chart_path, force=force, workers=workers)
+    click.echo(f"{result.attrs['samples']:,} samples; {result.attrs['method']}")
+    levels = [0.01, 0.5, 0.99]
+    click.echo(f"{'output':<32} {'design':>14} " + " ".join(f"{f'q{l:g}':>14}"
+                                                              for l in levels) + "  with value")
+    for name in result.output.values:
+        row = result.sel(output=name)
+        q = [float(row.quantiles.sel(probability_level=l)) for l in levels]
+        click.echo(f"{str(name):<32} {float(row.nominal):>14.6g} "
+                   + " ".join(f"{v:>14.6g}" for v in q)
+                   + f"  {int(row.samples_with_value):,}")
+    for event, p, low, high in zip(result.event.values, result.probability.values,
+                                   result.probability_low.values,
+                                   result.probability_high.values):
+        click.echo(f"P({event}) = {p:.4f} [{low:.4f}, {high:.4f}]")
+    for label, target in (("result", output), ("chart", chart_path)):
+        if target:
+            click.echo(f"{label}: {Path(target).resolve()}")
+
+
 @cli.command(short_help="An atlas as one HTML page to explore offline, in the browser.",
              epilog=_epilog("sweep explore limits.nc -o limits.html",
                             "sweep explore front.nc -o front.html --vars blow_rate,force_peak_A"))

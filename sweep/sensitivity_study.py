@@ -211,7 +211,7 @@ def _analysis(problem, x, out, status, meets, mech, outputs, samples, seed, base
               sobol_analyze):
     d = problem["num_vars"]
     step = d + 2  # SALib's rows per base sample: A, AB_1 .. AB_d, B
-    codes = range(len(mech.status))  # a status's code is its place in the declaration
+    codes = mech.status_codes._asdict()  # {word: code}
     quantities, s1, s1c, st, stc, kept, kinds = [], [], [], [], [], [], []
 
     def indices(y, name, kind):
@@ -239,11 +239,10 @@ def _analysis(problem, x, out, status, meets, mech, outputs, samples, seed, base
     base_rows[0::step] = True  # A and B: the independent base samples
     base_rows[step - 1::step] = True
     probability, low, high, what = [], [], [], []
-    for code in codes:
+    for word, code in codes.items():
         hits = status == code
         if not hits[base_rows].any():
             continue
-        word = mech.status[code]
         indices(hits.astype(float), f"P(status = {word})", "indicator of a status")
         n_hits = int(hits[base_rows].sum())
         probability.append(n_hits / base_rows.sum())
