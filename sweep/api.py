@@ -945,32 +945,46 @@ def sensitivity(spec: Sweep | Mapping | str | os.PathLike,
             categorical input, a sample too large, or a path that cannot be written.
     """
     from sweep import sensitivity_study as sens
+
+    document = _document(spec, "spec", "a Sweep, a dict or the path of a TOML file")
+    target, picture = _study_targets(path, chart, force, spec)
+    result = sens.study(document, None if inputs is None else dict(inputs), outputs,
+                        samples, seed, workers)
+    return _written_study(result, target, picture, sens.figure)
+
+
+def _document(spec, name: str, what: str) -> dict:
+    """A spec document (the dict as given) from a Sweep, a dict or a TOML file."""
     from sweep.spec import Sweep, load
 
     if isinstance(spec, Sweep):
-        document = spec.source
-    elif isinstance(spec, Mapping):
-        document = dict(spec)
-    elif isinstance(spec, (str, os.PathLike)):
-        document = load(spec).source
-    else:
-        raise UserError(f"spec: a Sweep, a dict or the path of a TOML file, not "
-                        f"{type(spec).__name__}")
+        return dict(spec.source)
+    if isinstance(spec, Mapping):
+        return dict(spec)
+    if isinstance(spec, (str, os.PathLike)):
+        return dict(load(spec).source)
+    raise UserError(f"{name}: {what}, not {type(spec).__name__}")
+
+
+def _study_targets(path, chart, force: bool, spec) -> tuple[Path | None, Path | None]:
+    """Where a study's result (.nc) and chart (.png) go, checked before any compute."""
+    from sweep.store import check_target
+
     target = None if path is None else path_argument(path, "path")
     if target is not None:
-        from sweep.store import check_target
-
         check_target(target, force, inputs=input_files(spec))
-    picture = _png(chart, force, spec, name="chart")
-    result = sens.study(document, None if inputs is None else dict(inputs), outputs,
-                        samples, seed, workers)
-    if target is not None:
-        from sweep.store import atomic
+    return target, _png(chart, force, spec, name="chart")
 
+
+def _written_study(result, target, picture, figure):
+    """A study's result written (atomically) and charted where asked."""
+    from sweep.store import atomic
+
+    if target is not None:
         with atomic(target) as tmp:
             result.to_netcdf(tmp, engine="netcdf4")
     if picture is not None:
-        save_figure(sens.figure(result), picture)
+        save_figure(figure(result), picture)
     return result
 
 
@@ -1032,34 +1046,16 @@ def tolerance(design: Sweep | Mapping | str | os.PathLike, tolerances: Mapping[s
             point, a sample too large, or a path that cannot be written.
     """
     from sweep import tolerance_study
-    from sweep.spec import Sweep, load
-    from sweep.store import atomic, check_target
 
-    if isinstance(design, Sweep):
-        document = design.source
-    elif isinstance(design, Mapping):
-        document = dict(design)
-    elif isinstance(design, (str, os.PathLike)):
-        document = load(design).source
-    else:
-        raise UserError(f"design: a spec of one design (dict, TOML file or Sweep), not "
-                        f"{type(design).__name__}")
+    document = _document(design, "design", "a spec of one design (dict, TOML file or Sweep)")
     if method:
         if not isinstance(method, Mapping):
             raise UserError("method: a dict of method options, e.g. {'geometry_tol': 1e-3}")
         document["method"] = {**(document.get("method") or {}), **dict(method)}
-    target = None if path is None else path_argument(path, "path")
-    if target is not None:
-        check_target(target, force, inputs=input_files(design))
-    picture = _png(chart, force, design, name="chart")
+    target, picture = _study_targets(path, chart, force, design)
     result = tolerance_study.study(document, dict(tolerances) if isinstance(
         tolerances, Mapping) else tolerances, samples, seed, workers)
-    if target is not None:
-        with atomic(target) as tmp:
-            result.to_netcdf(tmp, engine="netcdf4")
-    if picture is not None:
-        save_figure(tolerance_study.figure(result), picture)
-    return result
+    return _written_study(result, target, picture, tolerance_study.figure)
 
 
 def write_selection(ds: xarray.Dataset, target: Path) -> None:

@@ -476,6 +476,11 @@ def sensitivity(spec_file, output, chart_path, samples, seed, names, workers, fo
         cells = [f"S1 {a:5.2f}±{b:4.2f} ST {c:5.2f}" for a, b, c in zip(
             row.first_order.values, row.first_order_conf.values, row.total.values)]
         click.echo(f"{str(q):<{width}}  " + "  ".join(f"{c:>22}" for c in cells))
+    _said_study(result, output, chart_path)
+
+
+def _said_study(result, output, chart_path) -> None:
+    """A study's probabilities with their intervals, and where its files went."""
     for event, p, low, high in zip(result.event.values, result.probability.values,
                                    result.probability_low.values,
                                    result.probability_high.values):
@@ -558,13 +563,7 @@ def tolerance(source, design, where, tolerances, methods, samples, seed, output,
         click.echo(f"{str(name):<32} {float(row.nominal):>14.6g} "
                    + " ".join(f"{v:>14.6g}" for v in q)
                    + f"  {int(row.samples_with_value):,}")
-    for event, p, low, high in zip(result.event.values, result.probability.values,
-                                   result.probability_low.values,
-                                   result.probability_high.values):
-        click.echo(f"P({event}) = {p:.4f} [{low:.4f}, {high:.4f}]")
-    for label, target in (("result", output), ("chart", chart_path)):
-        if target:
-            click.echo(f"{label}: {Path(target).resolve()}")
+    _said_study(result, output, chart_path)
 
 
 @cli.command(short_help="An atlas as one HTML page to explore offline, in the browser.",

@@ -106,12 +106,7 @@ def study(document: dict, inputs: dict | None = None, outputs=None, samples: int
     from sweep import engine, registry, spec
     from sweep.requirements import evaluate as evaluate_requirements
 
-    if isinstance(samples, bool) or not isinstance(samples, int) or not \
-            2 <= samples <= MAX_SAMPLES or samples & (samples - 1):
-        raise UserError(f"samples: a power of two from 2 to {MAX_SAMPLES:,} (Sobol' "
-                        f"points keep their balance), not {samples!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int):
-        raise UserError(f"seed: a whole number, not {seed!r}")
+    check_sampling(samples, seed, MAX_SAMPLES)
     document = dict(document)
     grid = dict(document.get("grid") or {})
     if inputs is None:
@@ -162,7 +157,7 @@ def study(document: dict, inputs: dict | None = None, outputs=None, samples: int
     order = [p.name for p in mech.parameters]
     for k, key in enumerate(problem["names"]):
         params[order.index(key)] = x[:, k]  # a numeric parameter's code is its value
-    out, status = _evaluate(base, params, workers)
+    out, status = evaluate(base, params, workers)
     index = mech.output_index
     meets = None
     if base.requirements:
@@ -173,6 +168,17 @@ def study(document: dict, inputs: dict | None = None, outputs=None, samples: int
                      sobol_analyze)
 
 
+def check_sampling(samples, seed, most: int) -> None:
+    """A quasi-random sample's size (a power of two: the Sobol' points keep their
+    balance) and seed, or a UserError naming them."""
+    if isinstance(samples, bool) or not isinstance(samples, int) or not \
+            2 <= samples <= most or samples & (samples - 1):
+        raise UserError(f"samples: a power of two from 2 to {most:,} (Sobol' points keep "
+                        f"their balance), not {samples!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int):
+        raise UserError(f"seed: a whole number, not {seed!r}")
+
+
 def _inside(bounds, dist) -> float:
     if dist in ("unif", "triang", "truncnorm"):
         return 0.5 * (bounds[0] + bounds[1])
@@ -181,8 +187,9 @@ def _inside(bounds, dist) -> float:
     return float(bounds[0])
 
 
-def _evaluate(base, params, workers):
-    """The kernel over every column, in blocks on threads (the kernels release the GIL)."""
+def evaluate(base, params, workers=None):
+    """(outputs, status) of the kernel over every column of ``params``, in blocks on
+    threads (the kernels release the GIL)."""
     from sweep.warmup import cores
 
     n = params.shape[1]
@@ -199,7 +206,7 @@ def _evaluate(base, params, workers):
             np.concatenate([p[1] for p in parts]))
 
 
-def _wilson(hits: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+def wilson(hits: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
     """The Wilson score interval of a probability from ``hits`` of ``n``."""
     p = hits / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
@@ -246,7 +253,7 @@ def _analysis(problem, x, out, status, meets, mech, outputs, samples, seed, base
         indices(hits.astype(float), f"P(status = {word})", "indicator of a status")
         n_hits = int(hits[base_rows].sum())
         probability.append(n_hits / base_rows.sum())
-        interval = _wilson(n_hits, int(base_rows.sum()))
+        interval = wilson(n_hits, int(base_rows.sum()))
         low.append(interval[0])
         high.append(interval[1])
         what.append(f"status = {word}")
@@ -256,7 +263,7 @@ def _analysis(problem, x, out, status, meets, mech, outputs, samples, seed, base
                 "requirements met by an ok design")
         n_hits = int(ok[base_rows].sum())
         probability.append(n_hits / base_rows.sum())
-        interval = _wilson(n_hits, int(base_rows.sum()))
+        interval = wilson(n_hits, int(base_rows.sum()))
         low.append(interval[0])
         high.append(interval[1])
         what.append("meets the requirements")

@@ -22,8 +22,6 @@ from __future__ import annotations
 
 import json
 import math
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 import xarray as xr
 
@@ -32,7 +30,6 @@ from sweep.errors import UserError
 #: samples at most (a power of two: the Sobol' points keep their balance)
 MAX_SAMPLES = 2 ** 20
 QUANTILES = (0.0, 0.01, 0.05, 0.25, 0.5, 0.75, 0.95, 0.99, 1.0)
-BLOCK = 4096
 
 
 def _plain(value):
@@ -146,15 +143,9 @@ def study(document: dict, tolerances: dict, samples: int = 4096, seed: int = 0,
 
     from sweep import engine, spec
     from sweep.requirements import evaluate as evaluate_requirements
-    from sweep.sensitivity_study import _wilson
-    from sweep.warmup import cores
+    from sweep.sensitivity_study import wilson, check_sampling, evaluate
 
-    if isinstance(samples, bool) or not isinstance(samples, int) or not \
-            2 <= samples <= MAX_SAMPLES or samples & (samples - 1):
-        raise UserError(f"samples: a power of two from 2 to {MAX_SAMPLES:,}, not "
-                        f"{samples!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int):
-        raise UserError(f"seed: a whole number, not {seed!r}")
+    check_sampling(samples, seed, MAX_SAMPLES)
     for key, entry in (document.get("grid") or {}).items():
         if not (isinstance(entry, list) and len(entry) == 1):
             raise UserError(f"grid.{key}: a design is one point; give one value")
@@ -176,15 +167,7 @@ def study(document: dict, tolerances: dict, samples: int = 4096, seed: int = 0,
             params[order.index(key)] = low
             nominal[order.index(key)] = low
 
-    def one(start):
-        out, status, _ = base.kernel(np.ascontiguousarray(params[:, start:start + BLOCK]),
-                                     base.method_record)
-        return out, status
-
-    with ThreadPoolExecutor(workers or cores()) as pool:
-        parts = list(pool.map(one, range(0, samples, BLOCK)))
-    out = np.concatenate([p[0] for p in parts], axis=1)
-    status = np.concatenate([p[1] for p in parts])
+    out, status = evaluate(base, params, workers)
     own_out, own_status, _ = base.kernel(np.ascontiguousarray(nominal), base.method_record)
     index = mech.output_index
     names = [o for o in base.scalar_outputs if not mech.output(o).is_flag]
@@ -199,7 +182,7 @@ def study(document: dict, tolerances: dict, samples: int = 4096, seed: int = 0,
         if count:
             events.append(what)
             probability.append(count / samples)
-            interval = _wilson(count, samples)
+            interval = wilson(count, samples)
             low.append(interval[0])
             high.append(interval[1])
 
