@@ -37,8 +37,8 @@ if TYPE_CHECKING:
 
 __all__ = ["Sweep", "UserError", "boundaries", "chart", "decode", "example", "examples",
            "explore", "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
-           "query", "run", "sensitivity", "sheet", "tolerance", "design_spec", "warmup",
-           "with_requirements"]
+           "query", "robust", "run", "sensitivity", "sheet", "tolerance", "design_spec",
+           "warmup", "with_requirements"]
 
 #: an atlas computed in memory (``run`` without a path) may take at most this much
 IN_MEMORY_LIMIT = 2 * 1024**3  # bytes
@@ -1056,6 +1056,53 @@ def tolerance(design: Sweep | Mapping | str | os.PathLike, tolerances: Mapping[s
     result = tolerance_study.study(document, dict(tolerances) if isinstance(
         tolerances, Mapping) else tolerances, samples, seed, workers)
     return _written_study(result, target, picture, tolerance_study.figure)
+
+
+def robust(atlas: AtlasLike | Sweep | Mapping, over: str | Mapping[str, Any], *,
+           refine: list[str] | str | None = None, path: str | os.PathLike | None = None,
+           force: bool = False) -> xarray.Dataset:
+    """An atlas reduced over a band of one of its grid axes: each design's least and
+    greatest value of every output over the band and its spread, and whether it is usable
+    and meets its requirements at every point (``sweep.robust_study``: the method).
+
+    Over the material's R of an ``impact_machine`` atlas (its linkage is designed for
+    ``design_restitution`` and strikes whatever the site gives), a design that is
+    robustly feasible meets its limits for every rock in the band.
+
+    Parameters:
+        atlas: an atlas (a Dataset or its path), or a spec (dict or Sweep), run first.
+        over: a grid axis (its whole range) or {axis: (low, high)} inside its range.
+        refine: outputs whose extremes are refined between the samples on the kernel
+            (default: those the requirements name; [] for none).
+        path: a ``.nc`` to write the reduced atlas to; force: overwrite it.
+
+    Returns:
+        An atlas over the other grid axes (``NAME_min``, ``NAME_max``, ``NAME_spread``,
+        ``status``, ``requirements``) that ``pareto``, ``chart`` and ``explore`` read.
+
+    Raises:
+        UserError: an axis the atlas does not have or that is not numeric, a band outside
+            the atlas's range, an output to refine it does not have, or a path that
+            cannot be written.
+    """
+    import xarray as xr
+
+    from sweep import robust_study
+    from sweep.spec import Sweep
+
+    if isinstance(atlas, (Sweep, Mapping)) and not isinstance(atlas, xr.Dataset):
+        atlas = run(atlas)
+    ds = _atlas(atlas)
+    target = None if path is None else path_argument(path, "path")
+    if target is not None:
+        from sweep.store import check_target
+
+        check_target(target, force, inputs=input_files(atlas, ds))
+    with reading(ds):
+        result = robust_study.reduce(ds.load(), over, refine)
+    if target is not None:
+        write_selection(result, target)
+    return result
 
 
 def write_selection(ds: xarray.Dataset, target: Path) -> None:

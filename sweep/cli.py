@@ -5,6 +5,7 @@ Exit status 0 on success, 2 on bad input (one line naming the field), 1 on a fai
 
 from __future__ import annotations
 
+import json
 import os
 import sys
 import time
@@ -564,6 +565,45 @@ def tolerance(source, design, where, tolerances, methods, samples, seed, output,
                    + " ".join(f"{v:>14.6g}" for v in q)
                    + f"  {int(row.samples_with_value):,}")
     _said_study(result, output, chart_path)
+
+
+@cli.command(short_help="An atlas reduced over a band of one axis: worst, best, spread.",
+             epilog=_epilog("sweep robust machine.nc --over R=0.05:0.3 -o robust.nc",
+                            "sweep pareto robust.nc --max blow_energy_min --min "
+                            "motor_torque_peak_max"))
+@click.argument("atlas_file", metavar="ATLAS")
+@click.option("--over", required=True, metavar="AXIS[=LOW:HIGH]",
+              help="the band: a grid axis, its whole range or LOW:HIGH inside it")
+@click.option("--refine", default=None, metavar="A,B",
+              help="outputs whose extremes are refined between samples on the kernel "
+                   "(default: those the requirements name; '' for none)")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), required=True,
+              help="the reduced atlas (.nc)")
+@click.option("--force", is_flag=True, help="overwrite an existing file")
+def robust(atlas_file, over, refine, output, force):
+    """Each design's least and greatest value of every output over the band, its spread,
+    and whether it is usable and meets the requirements at every point of it."""
+    axis, sep, band = over.partition("=")
+    if sep:
+        low, colon, high = band.partition(":")
+        try:
+            over = {axis: (float(low), float(high))}
+        except ValueError:
+            raise UserError(f"--over: AXIS=LOW:HIGH numbers, not {band!r}") from None
+        if not colon:
+            raise UserError(f"--over: AXIS=LOW:HIGH, not {band!r}")
+    names = None if refine is None else [n for n in refine.split(",") if n]
+    result = api.robust(atlas_file, over, refine=names, path=output, force=force)
+    record = json.loads(result.attrs["robust"])
+    usable = int((result["requirements"] == 0).sum()) if "requirements" in result else None
+    click.echo(f"over {record['axis']} in {record['band']}: {record['samples_in_band']} "
+               f"samples" + (f", ends computed {record['ends_computed']}"
+                             if record["ends_computed"] else "")
+               + (f", refined: {', '.join(record['refined'])}" if record["refined"] else ""))
+    if usable is not None:
+        click.echo(f"{usable:,} of {result['status'].size:,} designs meet the requirements "
+                   "at every point of the band")
+    click.echo(f"atlas: {Path(output).resolve()}")
 
 
 @cli.command(short_help="An atlas as one HTML page to explore offline, in the browser.",
