@@ -58,6 +58,7 @@ def main(folder: Path) -> None:
             sweep.profile(atlas, names, where, path=DOCS / name, force=True)
         print(f"docs/{name}: `sweep profile` of {example} at {where}")
     explorer_screenshot(folder)
+    robust_figure(folder)
 
 
 def explorer_screenshot(folder: Path, name: str = "explorer.png") -> None:
@@ -79,6 +80,21 @@ def explorer_screenshot(folder: Path, name: str = "explorer.png") -> None:
     finally:
         browser.quit()
     print(f"docs/{name}: `sweep explore` of crank_rocker_limits, blow energy >= 20 J brushed")
+
+
+def robust_figure(folder: Path, name: str = "robust_rock_band.png") -> None:
+    """The robust design guide's chart, from its own spec (the page's first TOML block)."""
+    import re
+
+    text = (DOCS / "guide" / "robust.md").read_text()
+    spec = re.search(r"```toml\n(# file: rock_band.toml.*?)```", text, re.S).group(1)
+    (folder / "rock_band.toml").write_text(spec)
+    atlas = sweep.run(sweep.Sweep.from_toml(folder / "rock_band.toml"),
+                      folder / "rock_band.nc")
+    robust = sweep.robust(atlas, "R")
+    sweep.chart(robust, "largest_link", "m3", "requirements", overlay="blow_energy_min",
+                path=DOCS / name, force=True)
+    print(f"docs/{name}: the robust design guide's chart")
 
 
 if __name__ == "__main__":

@@ -9,7 +9,7 @@ The Python API (the same functions the ``sweep`` command line calls)::
     sweep.chart(atlas, x="R", y="largest_link", color="impact_speed").savefig("v.png")
 
 ``Sweep`` (``from_toml``, ``from_dict``), ``run``, ``open_atlas``, ``query``, ``chart``,
-``profile``, ``explore``, ``sheet``, ``sensitivity``, ``tolerance``, ``design_spec``, ``robust``, ``boundaries``, ``pareto``, ``with_requirements``, ``info``, ``parameters``,
+``profile``, ``explore``, ``sheet``, ``sensitivity``, ``tolerance``, ``design_spec``, ``robust``, ``lines``, ``boundaries``, ``pareto``, ``with_requirements``, ``info``, ``parameters``,
 ``example``, ``examples``, ``warmup`` and ``UserError`` are documented in ``sweep.api``. ``import sweep``
 is light: each name is imported on first use, and heavy libraries (numba, xarray, dask,
 matplotlib) by the functions that need them.
@@ -21,7 +21,7 @@ same names); install impact-sweep in its own environment.
 __all__ = ["Sweep", "UserError", "boundaries", "chart", "decode", "example", "examples",
            "explore", "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
            "query", "robust", "run", "sensitivity", "sheet", "tolerance", "design_spec",
-           "warmup", "with_requirements"]
+           "lines", "warmup", "with_requirements"]
 
 
 def __getattr__(name: str):

@@ -38,7 +38,7 @@ if TYPE_CHECKING:
 __all__ = ["Sweep", "UserError", "boundaries", "chart", "decode", "example", "examples",
            "explore", "info", "open_atlas", "open_boundaries", "parameters", "pareto", "profile",
            "query", "robust", "run", "sensitivity", "sheet", "tolerance", "design_spec",
-           "warmup", "with_requirements"]
+           "lines", "warmup", "with_requirements"]
 
 #: an atlas computed in memory (``run`` without a path) may take at most this much
 IN_MEMORY_LIMIT = 2 * 1024**3  # bytes
@@ -581,6 +581,45 @@ def _drawing_options(ax, cmap, figsize) -> None:
                 for v in figsize)):
             raise UserError(f"figsize: (width, height) in inches, each in (0, 100], not "
                             f"{figsize!r}")
+
+
+def lines(atlas: AtlasLike, x: str, y: list[str] | str, *, by: str | None = None,
+          values: list[Any] | None = None, at: Mapping[str, Any] | None = None,
+          path: str | os.PathLike | None = None, degrees: bool = True, ax: Any = None,
+          force: bool = False) -> Figure:
+    """Outputs against one grid axis, one curve per value of another (a family of curves,
+    as the papers draw them), the other grid axes held at one value.
+
+    Parameters:
+        atlas: an atlas (a Dataset of this tool, or the path of one).
+        x: the grid axis along the curves.
+        y: one output or several (a panel each; a list or names separated by commas).
+        by: a grid axis giving one curve per value; values: those of its values to draw
+            (the nearest grid values; default every one, at most 12).
+        at: other grid axes held at one value, {axis: number or "60deg"}.
+        path: a PNG to save the chart to (an existing one only with ``force``).
+        degrees: angles in degrees; ax: draw into these matplotlib axes (one y).
+
+    Returns:
+        The ``matplotlib.figure.Figure``.
+
+    Raises:
+        UserError: an axis or output the atlas does not have, a grid axis left neither
+            held nor drawn, too many curves, or a path that cannot be written.
+    """
+    from sweep import line_chart
+    from sweep.selection import at_values
+
+    ds = _atlas(atlas)
+    if ax is not None:
+        _drawing_options(ax, None, None)
+    out = _png(path, force, ds)
+    names = [v.strip() for v in y.split(",") if v.strip()] if isinstance(y, str) else list(y)
+    with reading(ds):
+        fig = line_chart.figure(ds, x, names, by, values, at_values(at), degrees, ax)
+    if out is not None:
+        save_figure(fig, out)
+    return fig
 
 
 def profile(atlas: AtlasLike, variables: list[str] | str, where: str | None = None, *,

@@ -631,6 +631,43 @@ def explore(atlas_file, output, names, max_designs, force):
     click.echo(f"explorer: {page.resolve()}")
 
 
+@cli.command(short_help="Outputs against one grid axis, one curve per value of another.",
+             epilog=_epilog("sweep lines bal.nc --x f --y moment_invariant_peak_balanced "
+                            "--by r --values 0.5,1,1.5 -o fig2.png",
+                            "sweep lines rp.nc --x k --y impact_speed --by R --at omega1=60"))
+@click.argument("atlas_file", metavar="ATLAS")
+@click.option("--x", "x", required=True, help="the grid axis along the curves")
+@click.option("--y", "y", required=True, help="outputs, comma-separated (a panel each)")
+@click.option("--by", default=None, help="a grid axis: one curve per value")
+@click.option("--values", default=None, metavar="V1,V2,...",
+              help="the values of --by to draw (nearest grid values)")
+@click.option("--at", "at", multiple=True, metavar="AXIS=VALUE",
+              help="hold another grid axis at its nearest value (repeat for more)")
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default="lines.png",
+              show_default=True)
+@click.option("--radians", is_flag=True, help="angles in radians (default: degrees)")
+@click.option("--force", is_flag=True, help="overwrite an existing PNG")
+def lines(atlas_file, x, y, by, values, at, output, radians, force):
+    """A family of curves, as the papers draw them: gaps where a design has no value."""
+    from sweep.selection import at_values
+    from sweep.store import check_target
+
+    check_target(Path(output), force, suffix=".png", inputs=[atlas_file])
+    at_values(list(at))
+    picks = None
+    if values is not None:
+        picks = []
+        for v in values.split(","):
+            try:
+                picks.append(float(v))
+            except ValueError:
+                picks.append(v.strip())
+    with api.open_atlas(atlas_file) as ds:
+        api.lines(ds, x, y, by=by, values=picks, at=list(at), path=output,
+                  degrees=not radians, force=force)
+    click.echo(f"chart: {Path(output).resolve()}")
+
+
 @cli.command(short_help="A chart of profiles (over the crank angle) at one grid point.",
              epilog=_epilog("sweep profile lf.nc --vars F21_n,F34_n,balancing_moment "
                             "--where 'omega1 == 30'",

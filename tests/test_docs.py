@@ -112,6 +112,7 @@ def test_the_readme_is_a_front_door():
 #: tour, the tutorial, then the guides in the navigation's order
 WALK_THROUGHS = ["README.md", "docs/tutorial.md", "docs/guide/cli.md", "docs/guide/specs.md",
                  "docs/guide/boundaries.md", "docs/guide/deciding.md", "docs/guide/reading.md",
+                 "docs/guide/robust.md",
                  *(f"docs/guide/{m}.md" for m in ("crank_rocker", "linkage_forces", "six_link",
                                                    "spring_balancer", "rotary_pendulum",
                                                    "impact_machine"))]
@@ -133,5 +134,6 @@ def test_the_walk_throughs_run_in_sequence_in_one_folder(tmp_path):
                  "breaker_forces.nc", "breaker_front.nc", "breaker_front.png",
                  "breaker_pick.nc", "breaker_pick.png", "limits.html", "pick.html",
                  "breaker.html", "breaker_sheet.html", "breaker_sheet.pdf",
-                 "breaker_pick_sheet.html", "breaker_explorer.html"):
+                 "breaker_pick_sheet.html", "breaker_explorer.html", "rock_band_robust.png",
+                 "rock_band_front.nc", "breaker_tolerance.png", "breaker_sensitivity.png"):
         assert (tmp_path / name).is_file(), name

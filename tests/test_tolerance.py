@@ -111,3 +111,25 @@ def test_bad_input_is_one_line_and_writes_nothing(limits, tmp_path, capsys):
         code, out, err = run_cli(capsys, *args)
         assert code == 2 and err.count("\n") == 1, (args, err)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_change_point_band_edges_are_where_geometry_tol_puts_them():
+    """A type c linkage (lambda0 + 1 = lambda2 + lambda3) with lambda2 moved so that the
+    identity misses by a fraction f of geometry_tol x (the links' sum, l1 = 1): inside the
+    band (f = 0.9) a change point with its impact, just outside (f = 1.1) not one, on
+    either side: one side locks at the node, the other passes it without the switch."""
+    lam0, lam3 = 4.2, 2.3
+    lam2 = lam0 + 1.0 - lam3
+    tol = 1e-4
+    total = 1.0 + lam0 + lam2 + lam3
+    statuses = {}
+    for f in (-1.1, -0.9, 0.9, 1.1):
+        shifted = lam2 + f * tol * total / (1.0 - f * tol)  # the sum moves with lambda2
+        atlas = sweep.decode(sweep.run({
+            "mechanism": "crank_rocker", "grid": {"lambda2": [shifted]},
+            "fixed": {"type": "general", "lambda0": lam0, "lambda3": lam3},
+            "method": {"geometry_tol": tol}, "outputs": ["impact_speed"]}))
+        statuses[f] = str(atlas.status.values.ravel()[0])
+    assert statuses[-0.9] == statuses[0.9] == "ok", statuses
+    outside = {statuses[-1.1], statuses[1.1]}
+    assert "ok" not in outside and len(outside) == 2, statuses
