@@ -18,9 +18,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
-from kernels.block import each_design
-from kernels.cache import module_level
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
+from kernels.block import design_block
 from kernels.declaration import POSITIVE, Boundary, Mechanism, Output, Quantity
 from kernels.fourbar import closure_vectors, crank_turns_fully, vector_kinematics
 
@@ -442,7 +441,7 @@ def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
     return S.ok
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): the steady response of its geometry's Fourier
     coefficients (computed once per geometry of the block, settings.geometry_index[i])."""
@@ -463,7 +462,7 @@ Settings = namedtuple("Settings", ["tol", "res_tol", "forced", "geometry_index",
 
 
 #: the block: each design of it by ``design`` (kernels/block.py), cached on disk
-balancer_block = module_level(each_design(design), "balancer_block", globals(), KERNEL_OPTIONS)
+balancer_block = design_block(design, "balancer_block", globals(), KERNEL_OPTIONS)
 
 
 def run(params, method):

@@ -13,9 +13,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
-from kernels.block import each_design
-from kernels.cache import module_level
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
+from kernels.block import design_block
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Boundary, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol)
 from kernels.fourbar import (CHANGE_POINT_A, CHANGE_POINT_B, CHANGE_POINT_C,
@@ -475,7 +474,7 @@ def working_transmission_angle(lam0, lam2, lam3, phi_star, window, mu_opposite, 
     return min(mu_edge, mu_opposite)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): its linkage's outputs by name, its status."""
     lp = linkage_point(
@@ -505,7 +504,7 @@ Settings = namedtuple("Settings", ["geometry_tol", "working_window"])
 
 
 #: the block: each design of it by ``design`` (kernels/block.py), cached on disk
-crank_rocker_block = module_level(each_design(design), "crank_rocker_block", globals(), KERNEL_OPTIONS)
+crank_rocker_block = design_block(design, "crank_rocker_block", globals(), KERNEL_OPTIONS)
 
 
 def run(params, method):

@@ -20,10 +20,9 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels import kinetostatics as ks
-from kernels.block import each_design
-from kernels.cache import module_level
+from kernels.block import design_block
 from kernels.crank_rocker import S as LINKAGE
 from kernels.crank_rocker import TYPE_GENERAL, linkage_point
 from kernels.extrema import cell_midpoints
@@ -249,7 +248,7 @@ def design_of(full):
     run that asks none of them compiles without them, a third less (numba prunes the
     branches on the constant)."""
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def design(i, pr, settings, out, prof):
         r = pr[P.R]
         law = int(pr[P.impact_law])
@@ -317,9 +316,9 @@ Settings = namedtuple("Settings", ["geometry_tol", "tol", "max_revolutions", "st
                                    "angles"])
 #: the blocks: each design of it by ``design_of(full)`` (kernels/block.py), cached on disk;
 #: the lean one where a run asks nothing beyond the steady cycle
-machine_block = module_level(each_design(design_of(True)), "machine_block", globals(),
+machine_block = design_block(design_of(True), "machine_block", globals(),
                              KERNEL_OPTIONS)
-lean_machine_block = module_level(each_design(design_of(False)), "lean_machine_block",
+lean_machine_block = design_block(design_of(False), "lean_machine_block",
                                   globals(), KERNEL_OPTIONS)
 
 

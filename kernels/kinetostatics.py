@@ -20,9 +20,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
-from kernels.block import each_design
-from kernels.cache import module_level
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
+from kernels.block import design_block
 from kernels.crank_rocker import impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol)
@@ -466,7 +465,7 @@ def cycle_pieces(kind, count, window):
     return np.array([start + window]), np.array([start + 2.0 * math.pi - window])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): status, the scalar outputs (out) and the
     profiles (prof[k, j])."""
@@ -578,7 +577,7 @@ Settings = namedtuple("Settings", ["geometry_tol", "window", "gl_x", "gl_w", "n_
 
 
 #: the block: each design of it by ``design`` (kernels/block.py), cached on disk
-linkage_forces_block = module_level(each_design(design), "linkage_forces_block", globals(), KERNEL_OPTIONS)
+linkage_forces_block = design_block(design, "linkage_forces_block", globals(), KERNEL_OPTIONS)
 
 
 def run(params, method):

@@ -20,9 +20,8 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
-from kernels.block import each_design
-from kernels.cache import module_level
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
+from kernels.block import design_block
 from kernels.crank_rocker import branch_values, impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quantity,
                                  geometry_tol)
@@ -251,7 +250,7 @@ def _cycle_peaks(data, n_samples, impacts, peak):
     return peak, peak2
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): its outputs by name, the rocker's angle over the
     4 pi cycle into prof[ROCKER_ANGLE], its status."""
@@ -334,7 +333,7 @@ Settings = namedtuple("Settings", ["geometry_tol", "samples", "angles"])
 
 
 #: the block: each design of it by ``design`` (kernels/block.py), cached on disk
-six_link_block = module_level(each_design(design), "six_link_block", globals(), KERNEL_OPTIONS)
+six_link_block = design_block(design, "six_link_block", globals(), KERNEL_OPTIONS)
 
 
 def run(params, method):

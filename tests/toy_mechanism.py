@@ -7,8 +7,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels.block import each_design
-from kernels.cache import module_level
+from kernels.block import design_block
 from kernels.declaration import POSITIVE, Mechanism, Output, Quantity
 
 DECLARATION = Mechanism(
@@ -44,7 +43,7 @@ def design(i, pr, settings, out, prof):
 
 
 Settings = namedtuple("Settings", ["scale"])
-toy_block = module_level(each_design(design), "toy_block", globals(), dict(cache=False))
+toy_block = design_block(design, "toy_block", globals(), dict(cache=False))
 
 
 def run(params, method):
