@@ -294,7 +294,8 @@ def page(ds: xr.Dataset, variables=None, max_designs: int = MAX_DESIGNS) -> str:
     source.selected.js_on_change("indices", CustomJS(args=args, code=_JS_COMMON + _JS_CHOSEN))
     download.js_on_event("button_click", CustomJS(args=args, code=_JS_COMMON + _JS_CSV))
 
-    header = Div(text=_header(ds, n, step, total), name="header", width=1100)
+    header = Div(text=_header(ds, n, step, total, max_designs), name="header",
+                 width=1100)
     layout = column(
         header,
         row(column(row(x_menu, y_menu, colour_menu), row(*axis_menus[:6]),
@@ -333,12 +334,12 @@ def _plain_title(ds) -> str:
     return str(ds.attrs.get("title", "atlas"))
 
 
-def _header(ds, n, step, total) -> str:
+def _header(ds, n, step, total, max_designs) -> str:
     from html import escape
 
     shown = (f"every design: {n:,}" if step == 1 else
-             f"{n:,} of {total:,} designs: every {step}th in grid order (the page shows at "
-             f"most {MAX_DESIGNS:,}; a chart or query of the atlas reads them all)")
+             f"{n:,} of {total:,} designs: one in every {step}, in grid order (the page "
+             f"shows at most {max_designs:,}; a chart or query of the atlas reads them all)")
     return (f"<h2 style='margin:4px 0'>{escape(_plain_title(ds))}</h2>"
             f"<div>{escape(ds.attrs.get('mechanism', ''))} · {shown} · "
             f"{escape(str(ds.attrs.get('code_version', '')))}</div>")

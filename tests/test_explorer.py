@@ -202,3 +202,14 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, limits):
     with pytest.raises(sweep.UserError, match=r"must end in \.html"):
         sweep.explore(atlas, atlas, force=True)
     assert not (tmp_path / "x.html").exists()
+
+
+def test_beyond_its_limit_the_page_shows_every_kth_design_and_says_so(limits, tmp_path):
+    ds, _ = limits
+    page = sweep.explore(Path(ds.encoding["source"]), tmp_path / "few.html",
+                         max_designs=50)
+    text = page.read_text()
+    step = -(-ds.status.size // 50)
+    shown = len(range(0, ds.status.size, step))
+    assert (f"{shown:,} of {ds.status.size:,} designs: one in every {step}, in grid order "
+            "(the page shows at most 50;") in text
