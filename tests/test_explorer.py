@@ -185,8 +185,18 @@ def test_every_examples_explorer_opens_offline_with_every_design(browser, tmp_pa
     atlas = sweep.run(small_example(name, 4))
     page = sweep.explore(atlas, tmp_path / f"{name}.html")
     open_page(browser, page, f"explorer_{name}")
-    assert js(browser, "return model('designs').data['grid_point'].length") == \
-        atlas.status.size
+    n = atlas.status.size
+    assert js(browser, "return model('designs').data['grid_point'].length") == n
+    # the chart's slice: the grid axes not drawn at their first value (every value where
+    # the chart is of outputs), counted by numpy on the atlas's own axes
+    x, y = js(browser, "return [model('x_menu').value, model('y_menu').value]")
+    dims = list(atlas.status.dims)
+    held = [d for d in dims if d not in (x, y)] if x in dims and y in dims else []
+    expected = n // int(np.prod([atlas.sizes[d] for d in held])) if held else n
+    assert len(js(browser, "return drawn('slice')")) == expected
+    for panel in js(browser, "return [...Bokeh.documents[0].all_models].map(m => m.name)"
+                             ".filter(x => x && x.startsWith('points_'))"):
+        assert len(js(browser, f"return drawn('{panel}')")) == n, panel
 
 
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, limits):
