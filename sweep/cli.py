@@ -101,7 +101,7 @@ def run(spec_file, output, force, chunk, workers, quiet, resume, scheduler):
                + status_summary(counts, usable))
 
 
-@cli.command(short_help="Refine the boundaries of a flag (status, regime) to a tolerance.",
+@cli.command(short_help="Refine a flag's boundaries (status, regime) to a tolerance.",
              epilog=_epilog("sweep boundaries cr.nc                    # status, to 1e-8",
                             "sweep boundaries rp.nc --var regime --tol 1e-10",
                             "sweep chart cr.nc --x R --y largest_link --color status "
@@ -374,7 +374,7 @@ def _said_sheet(page: Path, printed: Path | None) -> None:
                "pdf: not written: no Chromium (install Debian's chromium to print one)")
 
 
-@cli.command(short_help="One page for one design: parameters, outputs, margins, profiles.",
+@cli.command(short_help="One page for one design: parameters, outputs, margins.",
              epilog=_epilog("sweep sheet limits.nc --design 1767 -o design.html",
                             "sweep sheet front.nc --where 'picked == \"yes\"' -o pick.html"))
 @click.argument("atlas_file", metavar="ATLAS")

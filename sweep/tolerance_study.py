@@ -253,8 +253,8 @@ def figure(ds: xr.Dataset):
     ax.grid(True, axis="x", alpha=0.3)
     words = [str(e) for e in ds.event.values]
     bars.barh(range(len(words)), ds.probability.values * 100, height=0.5,
-              xerr=[(ds.probability - ds.probability_low).values * 100,
-                    (ds.probability_high - ds.probability).values * 100],
+              xerr=[np.clip((ds.probability - ds.probability_low).values, 0, None) * 100,
+                    np.clip((ds.probability_high - ds.probability).values, 0, None) * 100],
               color=palettes.OKABE_ITO[1], capsize=2)
     bars.set_yticks(range(len(words)), words, fontsize=8)
     bars.invert_yaxis()

@@ -158,7 +158,7 @@ def test_the_cli_hints_at_examples_and_its_help_shows_examples_and_exit_codes(ca
         assert code == 0 and "Examples:" in out and "Exit status: 0 success; 2 bad input" in out
     code, out, _ = run_cli(capsys, "--help")
     # each command's summary whole, not cut short with "..."
-    assert "Refine the boundaries of a flag (status, regime) to a tolerance." in out
+    assert "Refine a flag's boundaries (status, regime) to a tolerance." in out
     assert "..." not in out.split("Commands:")[1]
 
 
