@@ -49,9 +49,14 @@ def figure(ds: xr.Dataset, x: str, ys: list[str], by: str | None = None, values=
         raise UserError(f"by: {by} is also held in at; give it once")
     held, chosen = take_at(ds, at, grid=True)
     free = [d for d in dims if d not in (x, by) and held.sizes[d] > 1]
-    if free:
-        raise UserError(f"at: hold {', '.join(free)} at a value (at={{{free[0]!r}: ...}}, "
-                        f"--at {free[0]}=VALUE), or draw one line per value with by")
+    if free:  # a numeric axis is held with at, a categorical one drawn with by
+        numeric = [d for d in free if held[d].dtype.kind in "fiu"]
+        words = [d for d in free if d not in numeric]
+        parts = ([f"hold {', '.join(numeric)} at a value (at={{{numeric[0]!r}: ...}}, "
+                  f"--at {numeric[0]}=VALUE)"] if numeric else []) + \
+            ([f"draw {words[0]} as one line per value (by={words[0]!r}, --by {words[0]})"]
+             if words else [])
+        raise UserError("at: " + "; ".join(parts))
     held = held.where(usable_mask(held))
     if by is None:
         families = [(None, held)]
