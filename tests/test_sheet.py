@@ -154,3 +154,21 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(forces, tmp_path, capsy
         code, out, err = run_cli(capsys, *args)
         assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, (args, err)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(sweep.examples()))
+def test_every_examples_sheet_holds_its_outputs_and_status(name, tmp_path):
+    from tests.test_chart_text import small
+
+    document, _ = small(name)
+    atlas = sweep.run(document, tmp_path / f"{name}.nc")
+    words = sweep.decode(atlas).status.values.ravel()
+    usable = np.flatnonzero(np.isin(words, ["ok", "special_position",
+                                            "second_special_position"]))
+    design = int(usable[0]) if usable.size else 0
+    page, _ = sweep.sheet(tmp_path / f"{name}.nc", tmp_path / f"{name}.html",
+                          design=design, pdf=False)
+    rows = {row[0]: row for table in read(page).tables for row in table[1:]}
+    assert rows["status"][2] == str(words[design])
+    assert set(document.get("outputs", [])) <= set(rows)
