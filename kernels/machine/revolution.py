@@ -100,13 +100,15 @@ def revolution_scales(y0, y1, rtol, atol):
     return relative_scales(y0, y1, rtol, atol)
 
 
+#: the machine steps by DOPRI5 alone (its settings name no other method): DOP853 and RK4
+#: are not compiled into its flights (methods=())
 REVOLUTION = System(revolution_rhs, revolution_scales, revolution_values, revolution_rates,
                     (1, -1, -1), revolution_on_event, revolution_start,
-                    revolution_monitor)
+                    revolution_monitor, methods=())
 fly_revolution, _ = make_flight(REVOLUTION)
 #: timed_revolution(phi0, y0, phi1, m, settings) -> (reached, y): the state at crank angle
 #: phi1, the revolution's steps cut to land on it
-timed_revolution = make_timed_flight(revolution_rhs, revolution_scales)
+timed_revolution = make_timed_flight(revolution_rhs, revolution_scales, methods=())
 
 
 @njit(**INNER_OPTIONS)
