@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 
 import numpy as np
 import xarray as xr
@@ -99,7 +100,8 @@ def reduce(ds: xr.Dataset, over, refine=None) -> xr.Dataset:
         var = band[name].where(usable).transpose(*order, axis).values
         if extra is not None:
             var = np.concatenate([var, extra[name]], axis=-1)
-        with np.errstate(all="ignore"), _quiet():
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # a design with no value
             lo, hi = np.nanmin(var, axis=-1), np.nanmax(var, axis=-1)
         data[name] = [lo, hi]
     if extra is not None:
@@ -156,18 +158,6 @@ def reduce(ds: xr.Dataset, over, refine=None) -> xr.Dataset:
     out.attrs["title"] = f"{ds.attrs.get('title', '')}, over {axis} in [{low:g}, {high:g}]"
     out.attrs["robust"] = json.dumps(robust)
     return out
-
-
-class _quiet:
-    def __enter__(self):
-        import warnings
-
-        self._w = warnings.catch_warnings()
-        self._w.__enter__()
-        warnings.simplefilter("ignore", RuntimeWarning)
-
-    def __exit__(self, *exc):
-        self._w.__exit__(*exc)
 
 
 def _columns(ds, sweep, axis, order):
