@@ -28,7 +28,7 @@ import xarray as xr
 
 from sweep import labels, palettes
 from sweep.errors import UserError
-from sweep.selection import evaluate, flag_names, take_at
+from sweep.selection import first_point, flag_names, take_at
 
 #: panels per row of a chart with one panel per value of another axis
 PANELS_PER_ROW = 3
@@ -680,11 +680,7 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
             raise UserError(f"variables: {name} is not a profile (it has no extra dimension)")
     pdim = [d for d in ds[names[0]].dims if d not in grid_dims][0]
     if at is None:
-        mask = evaluate(ds, where).values if where else np.ones(ds["status"].shape, bool)
-        hits = np.argwhere(mask)
-        if not len(hits):
-            raise UserError("where: no grid point matches")
-        at = {d: int(i) for d, i in zip(grid_dims, hits[0])}
+        at = first_point(ds, where)
     point = ds.isel(at)
     by_unit: dict[str, list[str]] = {}
     for name in names:

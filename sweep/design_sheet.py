@@ -31,25 +31,20 @@ PDF_TIMEOUT = 120
 def point_of(ds: xr.Dataset, design: int | None = None, where: str | None = None) -> dict:
     """The grid point a sheet is of, {dim: index}: ``design``, its flat (C-order) index in
     the grid (as ``sweep query`` lists it), or the first that matches ``where``."""
-    from sweep.selection import evaluate
+    from sweep.selection import first_point
 
     dims = list(ds["status"].dims)
     shape = ds["status"].shape
     size = int(np.prod(shape))
     if (design is None) == (where is None):
         raise UserError("design: give one of design (a grid point's index) or where")
-    if design is not None:
-        if isinstance(design, bool) or not isinstance(design, (int, np.integer)) \
-                or not 0 <= design < size:
-            raise UserError(f"design: a grid point's index from 0 to {size - 1}, not "
-                            f"{design!r}")
-        flat = int(design)
-    else:
-        hits = np.flatnonzero(np.asarray(evaluate(ds, where).broadcast_like(ds["status"])
-                                         .transpose(*dims).values))
-        if not hits.size:
-            raise UserError("where: no grid point matches")
-        flat = int(hits[0])
+    if where is not None:
+        return first_point(ds, where)
+    if isinstance(design, bool) or not isinstance(design, (int, np.integer)) \
+            or not 0 <= design < size:
+        raise UserError(f"design: a grid point's index from 0 to {size - 1}, not "
+                        f"{design!r}")
+    flat = int(design)
     return dict(zip(dims, (int(i) for i in np.unravel_index(flat, shape))))
 
 

@@ -265,6 +265,19 @@ def take_at(ds: xr.Dataset, at: dict | None, grid: bool = False) -> tuple[xr.Dat
     return ds, ", ".join(chosen)
 
 
+def first_point(ds: xr.Dataset, where: str | None) -> dict:
+    """The first grid point (C order) matching ``where`` (the first of all without one),
+    as {dim: index}; a UserError where none does."""
+    dims = list(ds["status"].dims)
+    mask = np.asarray(evaluate(ds, where).broadcast_like(ds["status"]).transpose(*dims)
+                      .values) if where else np.ones(ds["status"].shape, bool)
+    hits = np.flatnonzero(mask)
+    if not hits.size:
+        raise UserError("where: no grid point matches")
+    return dict(zip(dims, (int(i) for i in np.unravel_index(int(hits[0]),
+                                                            ds["status"].shape))))
+
+
 def flag_names(var: xr.DataArray) -> dict[int, str] | None:
     """Code -> meaning of a flag variable, or None."""
     if "flag_meanings" not in var.attrs:
