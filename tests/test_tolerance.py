@@ -133,3 +133,45 @@ def test_the_change_point_band_edges_are_where_geometry_tol_puts_them():
     assert statuses[-0.9] == statuses[0.9] == "ok", statuses
     outside = {statuses[-1.1], statuses[1.1]}
     assert "ok" not in outside and len(outside) == 2, statuses
+
+
+@pytest.mark.parametrize("defect", [1e-6, 1e-8])
+def test_just_outside_the_band_the_linkage_does_what_the_guide_derives(defect):
+    """docs/guide/robust.md, "Just outside the band": a type c four-bar (l1 = 1) whose
+    coupler-rocker pair is longer than lambda0 + 1 by e passes the node phi1 = pi on one
+    smooth branch, u31 = [1 + s gamma x / sqrt(x^2 + x_e^2)] / (1 + lambda0) with x_e =
+    sqrt(2 (1 + lambda0) e / lambda0); a pair shorter by e cannot close for |x| < x_e. Checked
+    on the kernels' own loop closure against that asymptotic form, to O(x_e)."""
+    from kernels.fourbar import vector_kinematics
+
+    lam0, lam3 = 4.2, 2.3
+    gamma_of = lambda lam2: math.sqrt(lam0 * lam2 / lam3)  # noqa: E731
+    x_e = math.sqrt(2.0 * (1.0 + lam0) * defect / lam0)
+    lam2 = lam0 + 1.0 - lam3 + defect
+    gamma = gamma_of(lam2)
+    low, high = (1.0 - gamma) / (1.0 + lam0), (1.0 + gamma) / (1.0 + lam0)
+    for sigma in (1.0, -1.0):
+        node = vector_kinematics(math.pi, lam0, 1.0, lam2, lam3, sigma)
+        # the rocker's velocity reversal, done by the linkage over |x| ~ x_e
+        assert abs(node[9]) == pytest.approx(gamma / ((1.0 + lam0) * x_e), rel=20 * x_e)
+        assert node[7] == pytest.approx(1.0 / (1.0 + lam0), abs=20 * x_e)
+        # far from it (|x| = 30 x_e), the exact change point's motion on the same branch:
+        # the rocker reversed, as the impact reverses it, but by the links over |x| ~ x_e
+        exact = lam0 + 1.0 - lam3
+        sides = []
+        for x in (-30.0 * x_e, 30.0 * x_e):
+            u = vector_kinematics(math.pi + x, lam0, 1.0, lam2, lam3, sigma)[7]
+            ref = vector_kinematics(math.pi + x, lam0, 1.0, exact, lam3, sigma)[7]
+            assert u == pytest.approx(ref, abs=gamma / 900.0 + 20 * x_e), (x, u, ref)
+            sides.append(u)
+        assert sorted(sides) == pytest.approx([low, high], abs=0.1 * gamma)
+        assert low < 0.0 < high  # the two sides' values: the rocker reverses
+        for x in (0.3, 3.0):  # the tanh-like passage
+            u = vector_kinematics(math.pi + x * x_e, lam0, 1.0, lam2, lam3, sigma)[7]
+            shape = (1.0 + math.copysign(1.0, node[9]) * gamma * x / math.sqrt(x * x + 1.0)
+                     ) / (1.0 + lam0)
+            assert u == pytest.approx(shape, abs=20 * x_e)
+    short = lam0 + 1.0 - lam3 - defect  # locks: the dyad cannot reach |DB| near the node
+    for x, closes in ((0.9, False), (1.1, True)):
+        u31 = vector_kinematics(math.pi + x * x_e, lam0, 1.0, short, lam3, 1.0)[7]
+        assert math.isfinite(u31) == closes, (x, u31)
