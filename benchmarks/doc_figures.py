@@ -37,7 +37,10 @@ PROFILES = [("linkage_forces", ["F21_n", "F34_n", "F32_n", "F14_n", "balancing_m
              "omega1 == 30 and abs(tilt - 0.5235987755982988) < 1e-9",
              "linkage_forces_profile.png"),
             ("six_link", ["rocker_angle"], "abs(beta - 0.628318) < 1e-6 and abs(mu5 - 2.5) < 1e-9",
-             "six_link_rocker_profile.png")]
+             "six_link_rocker_profile.png"),
+            ("six_link_forces", ["F21_n", "F36_n", "F43_n", "F56_n", "balancing_moment"],
+             "abs(beta - 0.6) < 1e-6 and abs(mu5 - 2.5) < 1e-9",
+             "six_link_forces_profile.png")]
 
 
 def atlas_of(example: str, folder: Path) -> Path:

@@ -340,6 +340,18 @@ def geometry_tol(what: str) -> Quantity:
                     default=1e-9, minimum=0.0, maximum=1e-3)
 
 
+def profile_points(description: str) -> Quantity:
+    """The method's number of crank angles of the profiles (0: none, the default)."""
+    return Quantity("profile_points", "1", description, default=0, minimum=0,
+                    maximum=100000, integer=True)
+
+
+def peak_samples(name: str, description: str, default: int, minimum: int) -> Quantity:
+    """The method's number of crank angles sampled before each peak is refined."""
+    return Quantity(name, "1", description, default=default, minimum=minimum,
+                    maximum=10**6, integer=True)
+
+
 def _index(kind: str, names: list[str]):
     return namedtuple(kind, names)(*range(len(names)))
 

@@ -24,7 +24,7 @@ from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.block import design_block
 from kernels.crank_rocker import branch_values, impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quantity,
-                                 geometry_tol)
+                                 geometry_tol, peak_samples, profile_points)
 from kernels.extrema import cell_midpoints, clustered_points, peak_search
 from kernels.fourbar import CHANGE_POINT_B, crank_turns_fully, vector_kinematics
 
@@ -47,6 +47,15 @@ LABELS = {
     "blow_energy_1": "blow energy 1", "blow_energy_2": "blow energy 2", "blow_rate": "blow rate",
     "rocker_angle": r"rocker angle $\varphi_5$", "crank_angle": r"crank angle $\varphi_1$",
 }
+
+
+#: the profiles' coordinate: the crank angle over the 4 pi cycle, at cell midpoints
+CYCLE_ANGLE = Quantity("crank_angle", "rad", "crank angle (phi1) over the 4 pi cycle", "φ1")
+
+
+def cycle_angles(method) -> np.ndarray:
+    """The crank angles of the profiles: method.profile_points cell midpoints of 4 pi."""
+    return cell_midpoints(method.profile_points, 4.0 * np.pi)
 
 
 DECLARATION = Mechanism(
@@ -122,17 +131,14 @@ DECLARATION = Mechanism(
         and "rocker_inertia" not in given else None),
     profiles=(Output("rocker_angle", "rad", "stage 2 rocker angle (phi5), from the "
                      "direction D->E, in [0, 2 pi)", "φ5"),),
-    profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1) over the 4 pi cycle",
-                         "φ1"),
-    profile_coordinate=lambda method: cell_midpoints(method.profile_points, 4.0 * np.pi),
+    profile_dim=CYCLE_ANGLE,
+    profile_coordinate=cycle_angles,
     status=("ok", "not_assemblable", "nonfinite"),
     method=(
         geometry_tol("the link-length conditions"),
-        Quantity("samples", "1", "crank angles sampled over 4 pi to find each peak, which "
-                 "is then refined to the exact maximum", default=720, minimum=8,
-                 maximum=10**6, integer=True),
-        Quantity("profile_points", "1", "crank angles of the rocker_angle profile over "
-                 "4 pi (0: none)", default=0, minimum=0, maximum=100000, integer=True),
+        peak_samples("samples", "crank angles sampled over 4 pi to find each peak, which "
+                     "is then refined to the exact maximum", 720, 8),
+        profile_points("crank angles of the rocker_angle profile over 4 pi (0: none)"),
     ),
 )
 O = DECLARATION.output_index
@@ -190,6 +196,29 @@ def _impact_angle(target, lam6, lam2, lam3, offset, snap):
         else:
             hi = mid
     return 0.5 * (lo + hi)
+
+
+@njit(**KERNEL_OPTIONS)
+def assemblable(lam2, lam3, mu4, mu5, tol):
+    """Both stages as [SIX] builds them (docs/models.md §3.1): stage 1 l1 < l3 < l2 with
+    l2 - l3 < l1 (a drag link), stage 2 l3 < l4 < l5, and both cranks turn fully."""
+    if not (1.0 < lam3 < lam2 and lam2 - lam3 < 1.0 and 1.0 < mu4 < mu5):
+        return False
+    return (crank_turns_fully(1.0 - lam2 + lam3, 1.0, lam2, lam3, tol)
+            and crank_turns_fully(1.0 - mu4 + mu5, 1.0, mu4, mu5, tol))
+
+
+@njit(**KERNEL_OPTIONS)
+def impact_angles(lam6, lam2, lam3, offset, tol):
+    """The crank angles of the two impacts of a 4 pi cycle, where stage 2 is at its node:
+    phi3 + delta - beta = 2 pi k (phi3 grows by 4 pi; offset = delta - beta). In [0, 4 pi]
+    before reduction modulo 4 pi (the caller reduces them)."""
+    start = math.pi + offset  # phi3 = pi at the node phi1 = 0
+    k = math.floor(start / TWO_PI) + 1
+    impacts = np.empty(2)
+    for j in range(2):
+        impacts[j] = _impact_angle(TWO_PI * (k + j), lam6, lam2, lam3, offset, tol)
+    return impacts
 
 
 @njit(**KERNEL_OPTIONS)
@@ -267,12 +296,7 @@ def six_link_point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_s
     angle at prof_angles into prof, its status."""
     lam6 = 1.0 - lam2 + lam3
     mu6 = 1.0 - mu4 + mu5
-    # docs/models.md §3.1: stage 1 l1 < l3 < l2 with l2 - l3 < l1 (a drag link),
-    # stage 2 l3 < l4 < l5
-    if not (1.0 < lam3 < lam2 and lam2 - lam3 < 1.0 and 1.0 < mu4 < mu5):
-        return S.not_assemblable
-    if not (crank_turns_fully(lam6, 1.0, lam2, lam3, tol)
-            and crank_turns_fully(mu6, 1.0, mu4, mu5, tol)):
+    if not assemblable(lam2, lam3, mu4, mu5, tol):
         return S.not_assemblable
     gamma1 = math.sqrt(lam6 * lam2 / lam3)
     gamma2 = math.sqrt(mu6 * mu4 / mu5)
@@ -285,14 +309,10 @@ def six_link_point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_s
     offset = delta - beta
     before53, after53 = branch_values(int(CHANGE_POINT_B), mu6, gamma2, sigma2, direction)
 
-    # the two impacts of a 4 pi cycle: phi3 + delta - beta = 2 pi k (phi3 grows by 4 pi)
-    start = math.pi + offset  # phi3 = pi at the node phi1 = 0
-    k = math.floor(start / TWO_PI) + 1
     peak = 0.0
-    impacts = np.empty(2)
+    impacts = impact_angles(lam6, lam2, lam3, offset, tol)
     for j in range(2):
-        target = TWO_PI * (k + j)
-        phi_i = _impact_angle(target, lam6, lam2, lam3, offset, tol)
+        phi_i = impacts[j]
         impacts[j] = phi_i % (2.0 * TWO_PI)
         u31 = stage1(phi_i, lam6, lam2, lam3, tol)[1]
         m = round(phi_i / TWO_PI)
@@ -338,7 +358,7 @@ six_link_block = design_block(design, "six_link_block", globals(), KERNEL_OPTION
 
 def run(params, method):
     """Entry point: (outputs, status, profiles[1, n, n_angles])."""
-    angles = cell_midpoints(method.profile_points, 4.0 * np.pi)
+    angles = cycle_angles(method)
     n = params.shape[1]
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)

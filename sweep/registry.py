@@ -22,6 +22,7 @@ MECHANISMS = {
     "crank_rocker": "kernels.crank_rocker",
     "linkage_forces": "kernels.kinetostatics",
     "six_link": "kernels.six_link",
+    "six_link_forces": "kernels.six_link_forces",
     "spring_balancer": "kernels.balancer",
     "rotary_pendulum": "kernels.rotary_pendulum",
     "impact_machine": "kernels.impact_machine",

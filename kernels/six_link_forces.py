@@ -1,0 +1,377 @@
+"""Kinetostatics of the six-link impact mechanism ([SIX]; docs/models.md §3.4).
+
+The six-link is two four-bars sharing link 3 (docs/models.md §3.1): stage 1 (crank 1,
+coupler 2, link 3 about D, base AD) and stage 2 (link 3's arm DF at delta from DC, coupler
+4, rocker 5 about E, base DE at beta from AD). At each crank angle, on the path of
+kernels/six_link.py (stage 1 switching branch at its node, stage 2 on its impact branch):
+
+1. stage 2 by the one dyad solver (kernels.kinetostatics.dyad_reactions), its crank being
+   link 3's arm with angle phi3 + delta - beta, speed omega3 = u31 omega1 and acceleration
+   epsilon3 = u'31 omega1^2 + u31 epsilon1, and no mass of its own (link 3's is stage 1's);
+2. the force the stage-2 coupler puts on link 3 at F, moved to D as a force and a couple
+   (the same loads on the rigid link 3), as stage 1's external load on its rocker;
+3. stage 1 by the same solver: its reactions and the balancing moment on the crank, from
+   virtual work over all five moving links (stage 2 through the couple's work).
+
+Joints: A (crank, base), B (crank, coupler 2), C (coupler 2, link 3), D (link 3, base), F
+(link 3's arm, coupler 4), G (coupler 4, rocker 5), E (rocker 5, base); [SIX]'s figure of the
+assembly is lost, the letters F and G are ours. Forces F_ij act on link i from link j (base:
+6). The rigid dyad is singular at stage 1's nodes (phi1 = 0, 2 pi) and at the impacts (stage
+2's node): the peaks are taken outside a window around each, the cycle work and RMS of M_b on
+the open pieces between them (M_b stays finite: virtual work needs no reactions).
+"""
+
+import math
+from collections import namedtuple
+
+import numpy as np
+from numba import njit
+
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import kinetostatics as ks
+from kernels import six_link as sl
+from kernels.block import design_block
+from kernels.crank_rocker import impact_branch
+from kernels.declaration import (Mechanism, Output, Quantity, geometry_tol, peak_samples,
+                                 profile_points)
+from kernels.extrema import CLUSTER, clustered_points, peak_search
+from kernels.fourbar import CHANGE_POINT_B
+
+#: the stage geometry and drive, as six_link declares them
+_GEOMETRY = ("lambda2", "lambda3", "mu4", "mu5", "beta", "delta", "direction", "omega1",
+             "crank_length")
+_SIX = {q.name: q for q in sl.DECLARATION.parameters}
+_NONNEG = dict(minimum=0.0)
+#: illustrative links for the default six-link (l1 = 0.1 m): [SIX] gives no masses
+_MASS = {1: 2.0, 2: 3.0, 3: 4.0, 4: 3.0, 5: 8.0}
+_LENGTH = {1: 0.1, 2: 0.16, 3: 0.13, 4: 0.195, 5: 0.325}
+#: link i: its name, its first joint (the origin of its centroid), the line it runs along
+_LINK = {1: ("crank", "A", "AB"), 2: ("stage 1 coupler", "B", "BC"),
+         3: ("link 3", "D", "DC"), 4: ("stage 2 coupler", "F", "FG"),
+         5: ("rocker (striker)", "E", "EG")}
+_WINDOWED = ("outside |phi1 - phi1*| < special_window at stage 1's nodes and at the "
+             "impacts")
+#: the joints: (peak output's joint letter, force F_ij, what acts on what, the link it is
+#: resolved on)
+JOINTS = (("A", "F16", "base force on the crank", "crank"),
+          ("B", "F21", "crank pin force on the stage 1 coupler", "stage 1 coupler"),
+          ("C", "F32", "stage 1 coupler force on link 3", "link 3's arm DC"),
+          ("D", "F36", "base force on link 3", "link 3's arm DC"),
+          ("F", "F43", "link 3's force on the stage 2 coupler", "stage 2 coupler"),
+          ("G", "F54", "stage 2 coupler force on the rocker", "rocker"),
+          ("E", "F56", "base force on the rocker", "rocker"))
+
+LABELS = {
+    **{name: sl.LABELS[name] for name in _GEOMETRY if name in sl.LABELS},
+    "epsilon1": r"crank acceleration $\varepsilon_1$", "tilt": r"tilt $\theta$",
+    "g": "gravity $g$",
+    **{f"m{i}": f"{link} mass $m_{i}$" for i, (link, _, _) in _LINK.items()},
+    **{f"s{i}": f"{link} centroid $s_{i}$" for i, (link, _, _) in _LINK.items()},
+    **{f"q{i}": f"{link} offset $q_{i}$" for i, (link, _, _) in _LINK.items()},
+    **{f"J{i}": f"{link} inertia $I_{{S{i}}}$" for i, (link, _, _) in _LINK.items()},
+    **{f"force_peak_{joint}": rf"peak $|F_{{{force[1:]}}}|$ at {joint}"
+       for joint, force, _, _ in JOINTS},
+    **{f"{force}_{c}": rf"$F_{{{force[1:]}}}$ {side} {link}"
+       for _, force, _, link in JOINTS for c, side in (("n", "along"), ("t", "across"))},
+    "balancing_moment_peak": r"peak $|M_b|$", "balancing_moment_rms": r"RMS $M_b$",
+    "cycle_work": "cycle work", "balancing_moment": "balancing moment $M_b$",
+    "crank_angle": r"crank angle $\varphi_1$",
+}
+
+
+def _link_quantities(i: int) -> tuple:
+    """Mass, centroid (along, across) and centroidal inertia of link i, named as
+    linkage_forces names them."""
+    link, origin, line = _LINK[i]
+    mass, length = _MASS[i], _LENGTH[i]
+    return (
+        Quantity(f"m{i}", "kg", f"{link} mass (m{i})", f"m{i}", default=mass, **_NONNEG),
+        Quantity(f"s{i}", "1", f"{link} centroid along {line}, fraction of its length "
+                 f"from {origin}", default=0.5),
+        Quantity(f"q{i}", "m", f"{link} centroid offset across the link", default=0.0),
+        Quantity(f"J{i}", "kg m2", f"{link} centroidal moment of inertia (I_S{i})",
+                 f"I_S{i}", default=mass * length**2 / 12.0, **_NONNEG),
+    )
+
+
+DECLARATION = Mechanism(
+    labels=LABELS,
+    name="six_link_forces",
+    title="Kinetostatics of the six-link impact mechanism",
+    summary="both stages by the Assur-dyad vector route of linkage_forces (stage 2 first, "
+            "its load on link 3 then stage 1's), the balancing moment by virtual work, on "
+            "the switching path of six_link over the 4 pi cycle; cycle work and RMS by "
+            "Gauss-Legendre on the open pieces between stage 1's nodes and the impacts, "
+            "peaks from a clustered sample outside a window around each refined by golden "
+            "section",
+    references=sl.DECLARATION.references,
+    parameters=(
+        *(_SIX[name] for name in _GEOMETRY),
+        Quantity("epsilon1", "rad s-2", "crank angular acceleration (epsilon1, "
+                 "counter-clockwise positive)", "ε1", default=0.0),
+        *(q for i in _LINK for q in _link_quantities(i)),
+        Quantity("tilt", "rad", "inclination of the base AD to the horizontal", "θ",
+                 default=0.0, minimum=-math.pi, maximum=math.pi),
+        Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG),
+    ),
+    outputs=(
+        *(Output(f"force_peak_{joint}", "N", f"peak |{force}| at {joint} over the 4 pi "
+                 "cycle", f"|{force}|max", _WINDOWED) for joint, force, _, _ in JOINTS),
+        Output("balancing_moment_peak", "N m", "peak |M_b| over the 4 pi cycle (balancing "
+               "moment on the crank)", "|M_b|max", _WINDOWED),
+        Output("balancing_moment_rms", "N m", "RMS of the balancing moment over the 4 pi "
+               "cycle"),
+        Output("cycle_work", "J", "work of the balancing moment over the 4 pi cycle (two "
+               "blows; integral of M_b dphi1 along the motion)", "∮M_b dφ1", "equals the "
+               "kinetic energy the two blows take at constant omega1"),
+    ),
+    profiles=(
+        *ks.reaction_profiles(tuple((force, what, link) for _, force, what, link in JOINTS)),
+        Output("balancing_moment", "N m", "balancing moment on the crank (M_b, virtual "
+               "work)", "M_b"),
+    ),
+    profile_dim=sl.CYCLE_ANGLE,
+    profile_coordinate=sl.cycle_angles,
+    status=("ok", "not_assemblable", "nonfinite"),
+    method=(
+        geometry_tol("the link-length conditions"),
+        Quantity("special_window", "rad", "half-width of the window around stage 1's "
+                 "nodes and the impacts excluded from peaks", "δ", default=0.01,
+                 minimum=0.0, maximum=0.5, min_inclusive=False),
+        Quantity("quadrature_points", "1", "Gauss-Legendre points per open piece of the "
+                 "cycle for the cycle work and RMS", default=200, minimum=2, maximum=5000,
+                 integer=True),
+        peak_samples("peak_samples", "crank angles sampled over 4 pi to find each peak, "
+                     "which is then refined to the exact maximum", 721, 8),
+        profile_points("crank angles of the profiles over 4 pi (0: no profiles)"),
+    ),
+)
+P = DECLARATION.parameter_index
+O = DECLARATION.output_index
+F = DECLARATION.profile_index
+S = DECLARATION.status_codes
+#: the four-bar kinetostatics' parameter rows, which each stage fills
+FB = ks.DECLARATION.parameter_index
+#: the peaks' rows: the seven joints, then |M_b|
+PEAK_ROWS = (O.force_peak_A, O.force_peak_B, O.force_peak_C, O.force_peak_D,
+             O.force_peak_F, O.force_peak_G, O.force_peak_E, O.balancing_moment_peak)
+N_PEAKS = 8
+N_OUTPUTS = len(DECLARATION.outputs)
+#: golden section brackets a peak's crank angle to this [rad]
+PEAK_LOCATION = 1e-9
+TWO_PI = 2.0 * math.pi
+
+#: one design's two stages as the dyad solver takes them: the four-bar parameter vectors of
+#: stage 1 (pr1) and stage 2 (pr2), their result vectors, and what joins them
+Stages = namedtuple("Stages", ["lam6", "lam2", "lam3", "sigma2", "offset", "cos_beta",
+                               "sin_beta", "arm", "delta", "omega1", "epsilon1", "tol",
+                               "gravity1", "gravity2", "pr1", "pr2", "res1", "res2"])
+
+
+@njit(**KERNEL_OPTIONS)
+def fill_stage(pr, l0, l1, l2, l3, crank, coupler, rocker, omega1, epsilon1):
+    """A four-bar kinetostatics vector (rows FB): lengths, its crank's, coupler's and
+    rocker's (m, s, q, J), the crank's drive; no external load, a fixed base (gravity is
+    passed apart)."""
+    pr[:] = 0.0
+    pr[FB.l0], pr[FB.l1], pr[FB.l2], pr[FB.l3] = l0, l1, l2, l3
+    pr[FB.m1], pr[FB.s1], pr[FB.q1], pr[FB.J1] = crank
+    pr[FB.m2], pr[FB.s2], pr[FB.q2], pr[FB.J2] = coupler
+    pr[FB.m3], pr[FB.s3], pr[FB.q3], pr[FB.J3] = rocker
+    pr[FB.omega1], pr[FB.epsilon1] = omega1, epsilon1
+    pr[FB.base_motion] = ks.BASE_FIXED
+
+
+@njit(**KERNEL_OPTIONS)
+def solve(phi1, st):
+    """Both stages at crank angle phi1 into st.res1 (stage 1: F16 as F14, F21, F32, F36 as
+    F34, M_b) and st.res2 (stage 2: F43 as F21, F54 as F32, F56 as F34), in the layout of
+    kernels.kinetostatics (N_RESULT). False where a loop cannot close."""
+    phi3, u31, du31 = sl.stage1(phi1, st.lam6, st.lam2, st.lam3, st.tol)
+    if not (math.isfinite(phi3) and math.isfinite(u31) and math.isfinite(du31)):
+        return False
+    pr1, pr2, res2 = st.pr1, st.pr2, st.res2
+    pr2[FB.omega1] = u31 * st.omega1
+    pr2[FB.epsilon1] = du31 * st.omega1 * st.omega1 + u31 * st.epsilon1
+    g2x, g2y = st.gravity2
+    if not ks.dyad_reactions(phi3 + st.offset, pr2, st.sigma2, res2, st.tol, g2x, g2y,
+                             0.0, 0.0):
+        return False
+    # the stage-2 coupler's force on link 3 at F (stage 1's frame), as a force at D and the
+    # couple of its arm DF
+    fx2, fy2 = -res2[ks.R_F21X], -res2[ks.R_F21Y]
+    fx = st.cos_beta * fx2 - st.sin_beta * fy2
+    fy = st.sin_beta * fx2 + st.cos_beta * fy2
+    arm_angle = phi3 + st.delta
+    c3, s3 = math.cos(phi3), math.sin(phi3)
+    pr1[FB.external_force_normal] = fx * c3 + fy * s3
+    pr1[FB.external_force] = -fx * s3 + fy * c3
+    pr1[FB.external_moment] = st.arm * (math.cos(arm_angle) * fy - math.sin(arm_angle) * fx)
+    g1x, g1y = st.gravity1
+    return ks.dyad_reactions(phi1, pr1, sl.stage1_branch(phi1), st.res1, st.tol, g1x, g1y,
+                             0.0, 0.0)
+
+
+@njit(**KERNEL_OPTIONS)
+def peak_quantity(q, st):
+    """The magnitude of joint q's reaction (A, B, C, D, F, G, E) or |M_b| (q = 7) from a
+    solution."""
+    if q < 4:
+        return ks.peak_quantity(q, st.res1)
+    if q < 7:
+        return ks.peak_quantity(q - 3, st.res2)  # stage 2's B, C, D are F, G, E
+    return ks.peak_quantity(ks.PEAK_MB, st.res1)
+
+
+@njit(**KERNEL_OPTIONS)
+def _peak_at(phi, data):
+    q, st = data
+    if not solve(phi, st):
+        return math.nan
+    return peak_quantity(q, st)
+
+
+_golden_peak, _refine_peak = peak_search(_peak_at)
+
+
+@njit(**KERNEL_OPTIONS)
+def cycle_breaks(impacts):
+    """The ends of the 4 pi cycle's smooth pieces: stage 1's nodes 0, 2 pi, 4 pi and the
+    two impacts, increasing (an impact on a node repeats it: an empty piece)."""
+    breaks = np.array([0.0, TWO_PI, 2.0 * TWO_PI, impacts[0], impacts[1]])
+    breaks.sort()
+    return breaks
+
+
+@njit(**INNER_OPTIONS)
+def forces_point(pr, settings, out, prof):
+    """One six-link's loads: outputs into out, profiles into prof, its status."""
+    tol = settings.geometry_tol
+    lam2, lam3, mu4, mu5 = pr[P.lambda2], pr[P.lambda3], pr[P.mu4], pr[P.mu5]
+    if not sl.assemblable(lam2, lam3, mu4, mu5, tol):
+        return S.not_assemblable
+    lam6, mu6 = 1.0 - lam2 + lam3, 1.0 - mu4 + mu5
+    direction = pr[P.direction]
+    w1, e1 = direction * pr[P.omega1], pr[P.epsilon1]
+    l1 = pr[P.crank_length]
+    l3 = lam3 * l1
+    beta, delta = pr[P.beta], pr[P.delta]
+    g, tilt = pr[P.g], pr[P.tilt]
+    pr1, pr2 = settings.pr1, settings.pr2
+    fill_stage(pr1, lam6 * l1, l1, lam2 * l1, l3, (pr[P.m1], pr[P.s1], pr[P.q1], pr[P.J1]),
+               (pr[P.m2], pr[P.s2], pr[P.q2], pr[P.J2]),
+               (pr[P.m3], pr[P.s3], pr[P.q3], pr[P.J3]), w1, e1)
+    # stage 2's crank is link 3's arm: its mass is stage 1's
+    fill_stage(pr2, mu6 * l3, l3, mu4 * l3, mu5 * l3, (0.0, 0.0, 0.0, 0.0),
+               (pr[P.m4], pr[P.s4], pr[P.q4], pr[P.J4]),
+               (pr[P.m5], pr[P.s5], pr[P.q5], pr[P.J5]), 0.0, 0.0)
+    st = Stages(lam6, lam2, lam3, impact_branch(int(CHANGE_POINT_B), direction),
+                delta - beta, math.cos(beta), math.sin(beta), l3, delta, w1, e1, tol,
+                (-g * math.sin(tilt), -g * math.cos(tilt)),
+                (-g * math.sin(tilt + beta), -g * math.cos(tilt + beta)), pr1, pr2,
+                settings.res1, settings.res2)
+    impacts = sl.impact_angles(lam6, lam2, lam3, delta - beta, tol)
+    for j in range(2):
+        impacts[j] = impacts[j] % (2.0 * TWO_PI)
+    breaks = cycle_breaks(impacts)
+
+    # cycle work and RMS of M_b: Gauss-Legendre on each open piece (M_b jumps at an impact)
+    gl_x, gl_w = settings.gl_x, settings.gl_w
+    work = 0.0
+    square = 0.0
+    for piece in range(breaks.shape[0] - 1):
+        a, b = breaks[piece], breaks[piece + 1]
+        half = 0.5 * (b - a)
+        if half <= 0.0:
+            continue
+        for k in range(gl_x.shape[0]):
+            if not solve(a + half * (gl_x[k] + 1.0), st):
+                return S.not_assemblable
+            mb = st.res1[ks.R_MB]
+            work += half * gl_w[k] * mb
+            square += half * gl_w[k] * mb * mb
+    out[O.balancing_moment_rms] = math.sqrt(square / (2.0 * TWO_PI))
+    out[O.cycle_work] = direction * work
+
+    # peaks outside the windows, piece by piece: a sample clustered towards the windows'
+    # edges, golden section around every sampled local maximum (kernels/extrema.py)
+    window, n_peak = settings.window, settings.n_peak
+    best = np.full(N_PEAKS, -math.inf)
+    values = np.empty((N_PEAKS, n_peak + 8))
+    for piece in range(breaks.shape[0] - 1):
+        a, b = breaks[piece] + window, breaks[piece + 1] - window
+        if b <= a:
+            continue
+        n = max(8, int(n_peak * (b - a) / (2.0 * TWO_PI)))
+        xs = clustered_points(a, b, n, int(CLUSTER))
+        if values.shape[1] < xs.shape[0]:
+            values = np.empty((N_PEAKS, xs.shape[0]))
+        for j in range(xs.shape[0]):
+            if not solve(xs[j], st):
+                return S.not_assemblable
+            for q in range(N_PEAKS):
+                values[q, j] = peak_quantity(q, st)
+        for q in range(N_PEAKS):
+            best[q] = max(best[q], _refine_peak((q, st), xs, values[q, :xs.shape[0]],
+                                                PEAK_LOCATION))
+    for q in range(N_PEAKS):
+        out[PEAK_ROWS[q]] = best[q]
+
+    # profiles: the rigid-model values at every sampled angle (NaN exactly at a break)
+    angles = settings.angles
+    for j in range(angles.shape[0]):
+        phi = angles[j]
+        at_break = False
+        for k in range(breaks.shape[0]):
+            at_break = at_break or abs(phi - breaks[k]) < 1e-12
+        if at_break or not solve(phi, st):
+            continue
+        res1, res2 = st.res1, st.res2
+        prof[F.F16_n, j], prof[F.F16_t, j] = res1[ks.R_F14N], res1[ks.R_F14T]
+        prof[F.F21_n, j], prof[F.F21_t, j] = res1[ks.R_F21N], res1[ks.R_F21T]
+        prof[F.F32_n, j], prof[F.F32_t, j] = res1[ks.R_F32N], res1[ks.R_F32T]
+        prof[F.F36_n, j], prof[F.F36_t, j] = res1[ks.R_F34N], res1[ks.R_F34T]
+        prof[F.F43_n, j], prof[F.F43_t, j] = res2[ks.R_F21N], res2[ks.R_F21T]
+        prof[F.F54_n, j], prof[F.F54_t, j] = res2[ks.R_F32N], res2[ks.R_F32T]
+        prof[F.F56_n, j], prof[F.F56_t, j] = res2[ks.R_F34N], res2[ks.R_F34T]
+        prof[F.balancing_moment, j] = res1[ks.R_MB]
+
+    for k in range(N_OUTPUTS):
+        if not math.isfinite(out[k]):
+            return S.nonfinite
+    return S.ok
+
+
+@njit(**INLINE_OPTIONS)
+def design(i, pr, settings, out, prof):
+    """One grid point (kernels/block.py)."""
+    return forces_point(pr, settings, out, prof)
+
+
+#: the method's options the block reads, by name, and its scratch: each stage's four-bar
+#: parameter vector (pr1, pr2) and result vector (res1, res2)
+Settings = namedtuple("Settings", ["geometry_tol", "window", "gl_x", "gl_w", "n_peak",
+                                   "angles", "pr1", "pr2", "res1", "res2"])
+
+
+#: the block: each design of it by ``design`` (kernels/block.py), cached on disk
+six_link_forces_block = design_block(design, "six_link_forces_block", globals(),
+                                     KERNEL_OPTIONS)
+
+
+def run(params, method):
+    """Entry point: (outputs, status, profiles[n_profiles, n, n_angles])."""
+    gl_x, gl_w = np.polynomial.legendre.leggauss(method.quadrature_points)
+    angles = sl.cycle_angles(method)
+    n = params.shape[1]
+    out = np.empty((len(O), n))
+    status = np.empty(n, dtype=np.int8)
+    prof = np.empty((len(F), n, angles.shape[0]))
+    n_fb = len(ks.DECLARATION.parameters)
+    settings = Settings(geometry_tol=float(method.geometry_tol),
+                        window=float(method.special_window), gl_x=gl_x, gl_w=gl_w,
+                        n_peak=int(method.peak_samples), angles=angles,
+                        pr1=np.empty(n_fb), pr2=np.empty(n_fb),
+                        res1=np.empty(ks.N_RESULT), res2=np.empty(ks.N_RESULT))
+    six_link_forces_block(np.ascontiguousarray(params), settings, out, status, prof)
+    return out, status, prof
