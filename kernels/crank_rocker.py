@@ -16,10 +16,11 @@ from numba import njit
 from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.block import design_block
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Boundary, Mechanism, Output,
-                                 Quantity, assembly_branch, geometry_tol)
+                                 Quantity, assembly_branch, geometry_tol, profile_points)
+from kernels.extrema import cell_midpoints
 from kernels.fourbar import (CHANGE_POINT_A, CHANGE_POINT_B, CHANGE_POINT_C,
                              change_point_identities, crank_turns_fully,
-                             transmission_angle_half)
+                             transmission_angle_half, vector_kinematics)
 
 TYPE_A, TYPE_B, TYPE_C, TYPE_GENERAL = 0, 1, 2, 3  # largest rod, rocker, base; any four-bar
 ROOT_SMALLER_BASE, ROOT_LARGER_BASE = 0, 1
@@ -74,6 +75,8 @@ LABELS = {
     "lambda3": r"rocker ratio $\lambda_3$", "base_root": "base root",
     "crank_length": "crank $l_1$", "envelope": "envelope $L$", "omega1": r"crank speed $\omega_1$",
     "impact_speed_limit": "impact speed limit", "sigma": r"branch $\sigma$",
+    "transfer_ratio": r"transfer ratio $u_{31}$", "rocker_angle": r"rocker angle $\varphi_3$",
+    "crank_angle": r"crank angle $\varphi_1$",
     "rocker_inertia": "rocker inertia $J_{D3}$", "gamma": r"node parameter $\gamma$",
     "restitution_kinematic": "kinematic restitution $R_k$",
     "transfer_before": r"$u_{31}$ before the node", "transfer_after": r"$u_{31}$ after the node",
@@ -186,6 +189,12 @@ DECLARATION = Mechanism(
         Output("restitution_kinematic_max", "1", "largest |Rk| reachable with this rocker "
                "ratio (type b only)", everywhere=True),
     ),
+    profiles=(Output("transfer_ratio", "1", "rocker transfer ratio u31 = dphi3/dphi1 on the "
+                     "assembly branch (NaN where the loop cannot close)", "u31"),
+              Output("rocker_angle", "rad", "rocker angle (phi3), from the direction A->D, "
+                     "in [0, 2 pi)", "φ3")),
+    profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1), from A->D", "φ1"),
+    profile_coordinate=lambda method: cell_midpoints(method.profile_points, 2.0 * np.pi),
     status=("ok", "not_assemblable", "no_real_synthesis", "wrong_branch", "nonfinite",
             "degenerate", "no_impact", "second_special_position", "no_special_position"),
     # at gamma itself (within geometry_tol) the linkage has a second change point, and the
@@ -196,6 +205,8 @@ DECLARATION = Mechanism(
         Quantity("working_window", "rad", "half-width of the window around the special "
                  "position left out of the working stroke's transmission angle (default "
                  "30 degrees)", "δ_w", default=math.pi / 6.0, minimum=0.0, maximum=1.5),
+        profile_points("crank angles of the transfer_ratio and rocker_angle profiles over "
+                       "a crank turn (0: none)"),
     ),
     rules=_rules,
     boundaries=(
@@ -215,6 +226,8 @@ DECLARATION = Mechanism(
 P = DECLARATION.parameter_index
 O = DECLARATION.output_index
 S = DECLARATION.status_codes
+TRANSFER_RATIO = DECLARATION.profile_index.transfer_ratio
+ROCKER_ANGLE = DECLARATION.profile_index.rocker_angle
 
 
 @njit(**KERNEL_OPTIONS)
@@ -496,11 +509,19 @@ def design(i, pr, settings, out, prof):
     out[O.restitution_kinematic_max] = lp.restitution_kinematic_max
     out[O.envelope], out[O.crank_length], out[O.omega1] = (lp.envelope, lp.crank_length,
                                                          lp.omega1)
+    angles = settings.angles
+    if lp.status == S.ok or lp.status == S.second_special_position:  # the usable statuses
+        for j in range(angles.shape[0]):  # [CR] Fig. 2: the rocker's motion over a turn
+            c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(
+                angles[j], lp.lambda0, 1.0, lp.lambda2, lp.lambda3, lp.assembly_branch,
+                settings.geometry_tol)
+            prof[TRANSFER_RATIO, j] = u31
+            prof[ROCKER_ANGLE, j] = math.atan2(s3, c3) % (2.0 * math.pi)
     return lp.status
 
 
-#: the method's options the block reads, by name
-Settings = namedtuple("Settings", ["geometry_tol", "working_window"])
+#: the method's options the block reads, by name (angles: the profiles' crank angles)
+Settings = namedtuple("Settings", ["geometry_tol", "working_window", "angles"])
 
 
 #: the block: each design of it by ``design`` (kernels/block.py), cached on disk
@@ -508,19 +529,21 @@ crank_rocker_block = design_block(design, "crank_rocker_block", globals(), KERNE
 
 
 def run(params, method):
-    """Entry point: (outputs, status, profiles); this mechanism has no profiles. The energy
-    per blow and the blow rate only where asked for."""
+    """Entry point: (outputs, status, profiles[2, n, n_angles]). The energy per blow and the
+    blow rate only where asked for."""
     n = params.shape[1]
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
+    angles = cell_midpoints(method.profile_points, 2.0 * np.pi)
+    prof = np.empty((len(DECLARATION.profiles), n, angles.shape[0]))
     crank_rocker_block(np.ascontiguousarray(params),
                        Settings(geometry_tol=float(method.geometry_tol),
-                                working_window=float(method.working_window)),
-                       out, status, np.empty((0, n, 0)))
+                                working_window=float(method.working_window), angles=angles),
+                       out, status, prof)
     w = out[O.omega1]
     out[O.blow_energy] = (0.5 * params[P.rocker_inertia] * (out[O.transfer_before] * w) ** 2
                           if "blow_energy" in method.outputs else np.nan)
     out[O.blow_rate] = (np.where(np.isfinite(out[O.transfer_before]),
                                  60.0 * np.abs(w) / (2.0 * np.pi), np.nan)
                         if "blow_rate" in method.outputs else np.nan)
-    return out, status, np.empty((0, n, 0))
+    return out, status, prof

@@ -46,6 +46,10 @@ LABELS = {
     "assembly_branch_stage2": r"stage 2 branch $\sigma_2$",
     "blow_energy_1": "blow energy 1", "blow_energy_2": "blow energy 2", "blow_rate": "blow rate",
     "rocker_angle": r"rocker angle $\varphi_5$", "crank_angle": r"crank angle $\varphi_1$",
+    "link3_angle": r"link 3 angle $\varphi_3$ (switching)",
+    "link3_angle_branch_plus": r"$\varphi_3$ on $\sigma_1 = +1$",
+    "link3_angle_branch_minus": r"$\varphi_3$ on $\sigma_1 = -1$",
+    "transfer_stage2": r"stage 2 ratio $u_{53}$",
 }
 
 
@@ -130,7 +134,18 @@ DECLARATION = Mechanism(
         if given.get("outputs", set()) & {"blow_energy_1", "blow_energy_2"}
         and "rocker_inertia" not in given else None),
     profiles=(Output("rocker_angle", "rad", "stage 2 rocker angle (phi5), from the "
-                     "direction D->E, in [0, 2 pi)", "φ5"),),
+                     "direction D->E, in [0, 2 pi)", "φ5"),
+              Output("link3_angle", "rad", "link 3 angle (phi3) on the switching path, "
+                     "from the direction A->D, counted on (phi1 < phi3 < phi1 + 2 pi)", "φ3",
+                     on_request=True),
+              Output("link3_angle_branch_plus", "rad", "link 3 angle on stage 1's branch "
+                     "sigma1 = +1 throughout ([SIX]'s second law, formula (2)), counted as "
+                     "link3_angle", "φ3 (σ1 = +1)", on_request=True),
+              Output("link3_angle_branch_minus", "rad", "link 3 angle on stage 1's branch "
+                     "sigma1 = -1 throughout ([SIX]'s first law, formula (1)), counted as "
+                     "link3_angle", "φ3 (σ1 = −1)", on_request=True),
+              Output("transfer_stage2", "1", "stage 2 transfer ratio u53 = dphi5/dphi3 on "
+                     "its impact branch", "u53", on_request=True)),
     profile_dim=CYCLE_ANGLE,
     profile_coordinate=cycle_angles,
     status=("ok", "not_assemblable", "nonfinite"),
@@ -147,6 +162,10 @@ KERNEL_ROWS = DECLARATION.output_index.blow_energy_1
 P = DECLARATION.parameter_index
 S = DECLARATION.status_codes
 ROCKER_ANGLE = DECLARATION.profile_index.rocker_angle
+LINK3_ANGLE = DECLARATION.profile_index.link3_angle
+LINK3_PLUS = DECLARATION.profile_index.link3_angle_branch_plus
+LINK3_MINUS = DECLARATION.profile_index.link3_angle_branch_minus
+TRANSFER_STAGE2 = DECLARATION.profile_index.transfer_stage2
 #: per impact of the 4 pi cycle: rows of u51, stage-1 u31, crank angle, speed
 IMPACT_ROWS = ((O.transfer_impact_1, O.transfer_stage1_impact_1, O.impact_crank_angle_1,
                 O.impact_speed_1),
@@ -174,6 +193,14 @@ def stage1(phi1, lam6, lam2, lam3, snap):
         phi1, lam6, 1.0, lam2, lam3, stage1_branch(phi1), snap)
     rel = (math.atan2(s3, c3) - phi1) % TWO_PI
     return phi1 + rel, u31, du31
+
+
+@njit(**KERNEL_OPTIONS)
+def link3_on_branch(phi1, lam6, lam2, lam3, sigma1, snap):
+    """phi3 on one fixed stage-1 branch ([SIX]'s laws, Fig. 4), counted as stage1 counts."""
+    c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(
+        phi1, lam6, 1.0, lam2, lam3, sigma1, snap)
+    return phi1 + (math.atan2(s3, c3) - phi1) % TWO_PI
 
 
 @njit(**KERNEL_OPTIONS)
@@ -281,19 +308,19 @@ def _cycle_peaks(data, n_samples, impacts, peak):
 
 @njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
-    """One grid point (kernels/block.py): its outputs by name, the rocker's angle over the
-    4 pi cycle into prof[ROCKER_ANGLE], its status."""
+    """One grid point (kernels/block.py): its outputs by name, its profiles over the 4 pi
+    cycle, its status."""
     return six_link_point(pr[P.lambda2], pr[P.lambda3], pr[P.mu4], pr[P.mu5], pr[P.beta],
                           pr[P.delta], pr[P.direction], pr[P.omega1], pr[P.crank_length],
-                          settings.geometry_tol, settings.samples, settings.angles, out,
-                          prof[ROCKER_ANGLE])
+                          settings.geometry_tol, settings.samples, settings.angles,
+                          settings.figures, out, prof)
 
 
 @njit(**INNER_OPTIONS)
 def six_link_point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_samples,
-                   prof_angles, out, prof):
-    """One six-link: its outputs into out (NaN where a value does not exist), the rocker's
-    angle at prof_angles into prof, its status."""
+                   prof_angles, figures, out, prof):
+    """One six-link: its outputs into out (NaN where a value does not exist), its profiles
+    at prof_angles into prof[profile, angle], its status."""
     lam6 = 1.0 - lam2 + lam3
     mu6 = 1.0 - mu4 + mu5
     if not assemblable(lam2, lam3, mu4, mu5, tol):
@@ -337,10 +364,16 @@ def six_link_point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_s
     out[O.transfer_peak], out[O.transfer2_peak] = peak, peak2
 
     for j in range(prof_angles.shape[0]):
-        phi3 = stage1(prof_angles[j], lam6, lam2, lam3, tol)[0]
+        phi1 = prof_angles[j]
+        phi3 = stage1(phi1, lam6, lam2, lam3, tol)[0]
         c1, s1, c2, s2, c3, s3, u21, u53, du21, du53 = vector_kinematics(
             phi3 + offset, mu6, 1.0, mu4, mu5, sigma2, tol)
-        prof[j] = math.atan2(s3, c3) % TWO_PI  # the rocker swings about phi5* = pi
+        prof[ROCKER_ANGLE, j] = math.atan2(s3, c3) % TWO_PI  # the rocker swings about pi
+        if figures:  # [SIX] Figs. 4 and 6, where asked for
+            prof[LINK3_ANGLE, j] = phi3
+            prof[TRANSFER_STAGE2, j] = u53
+            prof[LINK3_PLUS, j] = link3_on_branch(phi1, lam6, lam2, lam3, 1.0, tol)
+            prof[LINK3_MINUS, j] = link3_on_branch(phi1, lam6, lam2, lam3, -1.0, tol)
 
     for k in range(KERNEL_ROWS):
         if not math.isfinite(out[k]):
@@ -348,8 +381,12 @@ def six_link_point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_s
     return S.ok
 
 
-#: the method's options the block reads, by name
-Settings = namedtuple("Settings", ["geometry_tol", "samples", "angles"])
+#: the method's options the block reads, by name (figures: the profiles of [SIX] Figs. 4
+#: and 6 are asked for)
+Settings = namedtuple("Settings", ["geometry_tol", "samples", "angles", "figures"])
+#: the profiles on request, for [SIX] Figs. 4 and 6
+FIGURE_PROFILES = ("link3_angle", "link3_angle_branch_plus", "link3_angle_branch_minus",
+                   "transfer_stage2")
 
 
 #: the block: each design of it by ``design`` (kernels/block.py), cached on disk
@@ -365,7 +402,9 @@ def run(params, method):
     prof = np.empty((len(DECLARATION.profiles), n, angles.shape[0]))
     six_link_block(np.ascontiguousarray(params),
                    Settings(geometry_tol=float(method.geometry_tol),
-                            samples=int(method.samples), angles=angles), out, status, prof)
+                            samples=int(method.samples), angles=angles,
+                            figures=bool(set(FIGURE_PROFILES) & set(method.outputs))),
+                   out, status, prof)
     w, j5 = params[P.omega1], params[P.rocker_inertia]
     for energy, transfer in ((O.blow_energy_1, O.transfer_impact_1),
                              (O.blow_energy_2, O.transfer_impact_2)):

@@ -624,7 +624,7 @@ def lines(atlas: AtlasLike, x: str, y: list[str] | str, *, by: str | None = None
 
 def profile(atlas: AtlasLike, variables: list[str] | str, where: str | None = None, *,
             path: str | os.PathLike | None = None, degrees: bool = True,
-            force: bool = False) -> Figure:
+            force: bool = False, against: str | None = None) -> Figure:
     """Profiles (values over the crank angle, e.g. joint reactions) at one grid point.
 
     Parameters:
@@ -634,6 +634,8 @@ def profile(atlas: AtlasLike, variables: list[str] | str, where: str | None = No
         path: a PNG to save the figure to (an existing one only with ``force``).
         degrees: angles in degrees.
         force: overwrite an existing PNG.
+        against: a profile for the x axis instead of the crank angle (e.g. the six-link's
+            rocker_angle against link3_angle, [SIX] Fig. 6).
 
     Returns:
         The ``matplotlib.figure.Figure``, one panel per unit; ``fig.grid_point`` says which
@@ -652,7 +654,8 @@ def profile(atlas: AtlasLike, variables: list[str] | str, where: str | None = No
     names = [v.strip() for v in variables.split(",")] if isinstance(variables, str) \
         else list(variables)
     with reading(ds):
-        fig, fig.grid_point = profile_figure(ds, [n for n in names if n], where, degrees)
+        fig, fig.grid_point = profile_figure(ds, [n for n in names if n], where, degrees,
+                                             against=against)
     if out is not None:
         save_figure(fig, out)
     return fig

@@ -651,22 +651,24 @@ def _angle_ticks(ax, degrees: bool) -> None:
 
 
 def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path,
-                  degrees: bool = True) -> tuple:
+                  degrees: bool = True, against: str | None = None) -> tuple:
     """``profile_figure`` saved as a PNG at ``out``; (out, the grid point's description)."""
-    fig, where_text = profile_figure(ds, names, where, degrees)
+    fig, where_text = profile_figure(ds, names, where, degrees, against=against)
     fig.savefig(out, dpi=110)
     return out, where_text
 
 
 def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
-                   degrees: bool = True, at: dict | None = None) -> tuple:
+                   degrees: bool = True, at: dict | None = None,
+                   against: str | None = None) -> tuple:
     """Profiles of ``names`` over the profile dimension at the first grid point matching
     ``where``, as (Figure, the grid point in words). One panel per unit, stacked over a
     shared angle axis (N and N m on one axis would flatten the smaller); where a profile
     spikes (1/dphi1 reactions) a symmetric-log y axis shows the spike and the rest of the
     cycle. Angles on both axes in degrees, or both in radians; the angle axis ticks every
     90° (or pi/2); the crank angles of special positions and impacts the atlas records are
-    marked. ``at``: the grid point {dim: index} instead of ``where``."""
+    marked. ``at``: the grid point {dim: index} instead of ``where``. ``against``: another
+    profile on the x axis instead of the profile dimension (phi5 against phi3)."""
     from matplotlib.figure import Figure
 
     if not names:
@@ -679,6 +681,9 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
         if len(extra) != 1:
             raise UserError(f"variables: {name} is not a profile (it has no extra dimension)")
     pdim = [d for d in ds[names[0]].dims if d not in grid_dims][0]
+    if against is not None and (against not in ds.data_vars or pdim not in ds[against].dims):
+        raise UserError(f"against: {against!r} is not a profile of this atlas; allowed: "
+                        + ", ".join(n for n in ds.data_vars if pdim in ds[n].dims))
     if at is None:
         at = first_point(ds, where)
     point = ds.isel(at)
@@ -687,8 +692,9 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
         by_unit.setdefault(labels.units(point, name, degrees), []).append(name)
     fig = Figure(figsize=(8, 2.0 + 2.6 * len(by_unit)), layout="constrained")
     axes = fig.subplots(len(by_unit), 1, sharex=True, squeeze=False)[:, 0]
-    angle = point[pdim].attrs.get("units") == "rad"
-    x = labels.shown_values(point[pdim], degrees)
+    xname = against or pdim
+    angle = point[xname].attrs.get("units") == "rad"
+    x = labels.shown_values(point[xname], degrees, ds if against else None)
     for ax, (units, group) in zip(axes, by_unit.items()):
         scale = []
         for name, colour in zip(group, palettes.CATEGORY_COLOURS):
@@ -704,7 +710,7 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
             ax.set_yscale("symlog", linthresh=typical)
             name += ", symlog"
         ax.set_ylabel(labels.wrapped(name, 34))
-        if angle:
+        if angle and against is None:
             _angle_ticks(ax, degrees)
             for value, kind in _angle_marks(point):
                 if np.isfinite(value):
@@ -719,9 +725,10 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
         if len(group) > 1:
             ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
                       frameon=False)
-    axes[-1].set_xlabel(labels.axis_label(ds, pdim, degrees))
-    fig.suptitle(labels.wrapped(f"{', '.join(labels.label(ds, n) for n in names)} over "
-                                f"{labels.label(ds, pdim)}, at "
+    axes[-1].set_xlabel(labels.axis_label(ds, xname, degrees))
+    fig.suptitle(labels.wrapped(f"{', '.join(labels.label(ds, n) for n in names)} "
+                                f"{'against' if against else 'over'} "
+                                f"{labels.label(ds, xname)}, at "
                                 f"{design_text(point, grid_dims, degrees)}", 100),
                  fontsize=9)
     where_text = design_text(point, grid_dims, degrees, plain=True)

@@ -671,15 +671,19 @@ def lines(atlas_file, x, y, by, values, at, output, radians, force):
 @cli.command(short_help="A chart of profiles (over the crank angle) at one grid point.",
              epilog=_epilog("sweep profile lf.nc --vars F21_n,F34_n,balancing_moment "
                             "--where 'omega1 == 30'",
-                            "sweep profile six.nc --vars rocker_angle --radians"))
+                            "sweep profile six.nc --vars rocker_angle --radians",
+                            "sweep profile six.nc --vars rocker_angle,transfer_stage2 "
+                            "--against link3_angle"))
 @click.argument("atlas_file", metavar="ATLAS")
 @click.option("--vars", "names", required=True, help="comma-separated profile variables")
 @click.option("--where", default=None, help="condition picking the grid point (first match)")
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default="profile.png",
               show_default=True)
 @click.option("--radians", is_flag=True, help="angles in radians, ticks at multiples of pi/2")
+@click.option("--against", default=None,
+              help="a profile for the x axis instead of the crank angle")
 @click.option("--force", is_flag=True, help="overwrite an existing PNG")
-def profile(atlas_file, names, where, output, radians, force):
+def profile(atlas_file, names, where, output, radians, against, force):
     """Chart of profiles (e.g. joint reactions over crank_angle) at one grid point: one
     panel per unit."""
     from sweep.selection import parse
@@ -689,7 +693,8 @@ def profile(atlas_file, names, where, output, radians, force):
     if where is not None:
         parse(where)
     with api.open_atlas(atlas_file) as ds:
-        fig = api.profile(ds, names, where, path=output, degrees=not radians, force=force)
+        fig = api.profile(ds, names, where, path=output, degrees=not radians, force=force,
+                          against=against)
     click.echo(f"profile at {fig.grid_point}: {Path(output).resolve()}")
 
 

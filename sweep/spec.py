@@ -585,7 +585,8 @@ def _outputs(model: SpecModel, mech: Mechanism, axes: list[Axis], record) -> lis
     on_grid = {name for axis in axes for name in axis.parameters()}
     echoes = {o.name for o in mech.outputs if o.echoes in on_grid}
     if model.outputs is None:
-        wanted = defaults + (profiles if profiling else [])
+        wanted = defaults + ([o.name for o in mech.profiles if not o.on_request]
+                             if profiling else [])
     else:
         if not model.outputs:
             raise UserError("outputs: empty list; omit the key for all outputs")

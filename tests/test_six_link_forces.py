@@ -15,6 +15,7 @@ from kernels import kinetostatics as kt
 from kernels import six_link as sl
 from kernels.crank_rocker import impact_branch
 from kernels.fourbar import CHANGE_POINT_B, loop_closure
+from tests.circles import circle_intersections
 
 TOL = 1e-9
 
@@ -34,14 +35,7 @@ def unit(angle):
 
 def circle_meet(p, rp, q, rq, near):
     """The intersection of the circles (p, rp) and (q, rq) nearer ``near``."""
-    d = q - p
-    dist = math.hypot(*d)
-    a = (rp**2 - rq**2 + dist**2) / (2.0 * dist)
-    h = math.sqrt(max(rp**2 - a**2, 0.0))
-    mid = p + a * d / dist
-    perp = np.array([-d[1], d[0]]) / dist
-    roots = (mid + h * perp, mid - h * perp)
-    return min(roots, key=lambda r: math.hypot(*(r - near)))
+    return min(circle_intersections(p, rp, q, rq), key=lambda r: math.hypot(*(r - near)))
 
 
 class SixLink:
