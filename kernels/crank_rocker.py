@@ -16,11 +16,13 @@ from numba import njit
 from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.block import design_block
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Boundary, Mechanism, Output,
-                                 Quantity, assembly_branch, geometry_tol, profile_points)
+                                 Quantity, assembly_branch, geometry_tol, path,
+                                 profile_points)
 from kernels.extrema import cell_midpoints
 from kernels.fourbar import (CHANGE_POINT_A, CHANGE_POINT_B, CHANGE_POINT_C,
                              change_point_identities, crank_turns_fully,
-                             transmission_angle_half, vector_kinematics)
+                             PATH_FREE, path_branch, transmission_angle_half,
+                             vector_kinematics)
 
 TYPE_A, TYPE_B, TYPE_C, TYPE_GENERAL = 0, 1, 2, 3  # largest rod, rocker, base; any four-bar
 ROOT_SMALLER_BASE, ROOT_LARGER_BASE = 0, 1
@@ -192,9 +194,10 @@ DECLARATION = Mechanism(
     profiles=(Output("transfer_ratio", "1", "rocker transfer ratio u31 = dphi3/dphi1 on the "
                      "assembly branch (NaN where the loop cannot close)", "u31"),
               Output("rocker_angle", "rad", "rocker angle (phi3), from the direction A->D, "
-                     "in [0, 2 pi)", "φ3")),
+                     "counted within pi of its angle at the special position", "φ3")),
     profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1), from A->D", "φ1"),
-    profile_coordinate=lambda method: cell_midpoints(method.profile_points, 2.0 * np.pi),
+    profile_coordinate=lambda method: cell_midpoints(method.profile_points,
+                                                     cycle_turns(method) * 2.0 * np.pi),
     status=("ok", "not_assemblable", "no_real_synthesis", "wrong_branch", "nonfinite",
             "degenerate", "no_impact", "second_special_position", "no_special_position"),
     # at gamma itself (within geometry_tol) the linkage has a second change point, and the
@@ -206,7 +209,8 @@ DECLARATION = Mechanism(
                  "position left out of the working stroke's transmission angle (default "
                  "30 degrees)", "δ_w", default=math.pi / 6.0, minimum=0.0, maximum=1.5),
         profile_points("crank angles of the transfer_ratio and rocker_angle profiles over "
-                       "a crank turn (0: none)"),
+                       "the cycle of the path (0: none)"),
+        path("the profiles"),
     ),
     rules=_rules,
     boundaries=(
@@ -511,17 +515,31 @@ def design(i, pr, settings, out, prof):
                                                          lp.omega1)
     angles = settings.angles
     if lp.status == S.ok or lp.status == S.second_special_position:  # the usable statuses
-        for j in range(angles.shape[0]):  # [CR] Fig. 2: the rocker's motion over a turn
+        # the rocker's angle at the node: the profile is counted within pi of it (the swing
+        # never wraps)
+        c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(
+            lp.special_crank_angle, lp.lambda0, 1.0, lp.lambda2, lp.lambda3,
+            lp.assembly_branch, settings.geometry_tol)
+        node3 = math.atan2(s3, c3)
+        for j in range(angles.shape[0]):  # [CR] Fig. 2: the rocker's motion over the cycle
+            sigma = path_branch(angles[j], lp.assembly_branch, lp.special_crank_angle,
+                                int(lp.special_position_count), settings.path)
             c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(
-                angles[j], lp.lambda0, 1.0, lp.lambda2, lp.lambda3, lp.assembly_branch,
+                angles[j], lp.lambda0, 1.0, lp.lambda2, lp.lambda3, sigma,
                 settings.geometry_tol)
             prof[TRANSFER_RATIO, j] = u31
-            prof[ROCKER_ANGLE, j] = math.atan2(s3, c3) % (2.0 * math.pi)
+            prof[ROCKER_ANGLE, j] = node3 - math.pi + (math.atan2(s3, c3) - node3
+                                                       + math.pi) % (2.0 * math.pi)
     return lp.status
 
 
 #: the method's options the block reads, by name (angles: the profiles' crank angles)
-Settings = namedtuple("Settings", ["geometry_tol", "working_window", "angles"])
+Settings = namedtuple("Settings", ["geometry_tol", "working_window", "angles", "path"])
+
+
+def cycle_turns(method) -> int:
+    """Crank turns of the profiles' cycle: one on the impact path, two on the free path."""
+    return 2 if method.path == PATH_FREE else 1
 
 
 #: the block: each design of it by ``design`` (kernels/block.py), cached on disk
@@ -534,11 +552,12 @@ def run(params, method):
     n = params.shape[1]
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
-    angles = cell_midpoints(method.profile_points, 2.0 * np.pi)
+    angles = DECLARATION.profile_coordinate(method)
     prof = np.empty((len(DECLARATION.profiles), n, angles.shape[0]))
     crank_rocker_block(np.ascontiguousarray(params),
                        Settings(geometry_tol=float(method.geometry_tol),
-                                working_window=float(method.working_window), angles=angles),
+                                working_window=float(method.working_window), angles=angles,
+                                path=int(method.path)),
                        out, status, prof)
     w = out[O.omega1]
     out[O.blow_energy] = (0.5 * params[P.rocker_inertia] * (out[O.transfer_before] * w) ** 2

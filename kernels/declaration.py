@@ -340,6 +340,15 @@ def geometry_tol(what: str) -> Quantity:
                     default=1e-9, minimum=0.0, maximum=1e-3)
 
 
+def path(what: str) -> Quantity:
+    """The method's path through the special positions (kernels.fourbar.path_branch)."""
+    return Quantity("path", "1", f"the path through the special positions for {what}: "
+                    "impact (the stop reverses the rocker: one crank turn) or free (no "
+                    "stop: the linkage passes each node on its smooth curve and switches "
+                    "branch, the cycle two crank turns)", default="impact",
+                    choices={"impact": 0, "free": 1})
+
+
 def profile_points(description: str) -> Quantity:
     """The method's number of crank angles of the profiles (0: none, the default)."""
     return Quantity("profile_points", "1", description, default=0, minimum=0,

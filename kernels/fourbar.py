@@ -166,6 +166,23 @@ def transfer_functions(phi1, l0, l1, l2, l3, sigma, snap=0.0):
     return math.atan2(s2, c2), math.atan2(s3, c3), u21, u31, du21, du31
 
 
+#: the paths a linkage with special positions can take over its crank angle
+PATH_IMPACT, PATH_FREE = 0, 1
+
+
+@njit(**KERNEL_OPTIONS)
+def path_branch(phi1, sigma, node, count, path):
+    """The assembly branch at crank angle phi1 on ``path``: on the impact path the branch
+    sigma throughout (the stop reverses the rocker at each node); on the free path (no stop,
+    [CR] §2, [GUIM] Fig. 4) the smooth curve through each node, so the branch flips at every
+    pass: sigma just after the node ``node``, -sigma just before it, with ``count`` nodes a
+    turn spaced 2 pi / count apart (docs/models.md §1.5)."""
+    if path != PATH_FREE or count == 0:
+        return sigma
+    passes = math.floor((phi1 - node) * count / (2.0 * math.pi))
+    return sigma if passes % 2 == 0 else -sigma
+
+
 @njit(**KERNEL_OPTIONS)
 def change_point_identities(lam0, lam2, lam3, tol):
     """Bit mask of the change-point identities that hold (l1 = 1), docs/models.md §1.5.

@@ -24,14 +24,17 @@ from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.block import design_block
 from kernels.crank_rocker import impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
-                                 Quantity, assembly_branch, geometry_tol)
+                                 Quantity, assembly_branch, geometry_tol, path,
+                                 profile_points)
 from kernels.extrema import CLUSTER, cell_midpoints, clustered_points, peak_search
 from kernels.fourbar import (
     CHANGE_POINT_A,
     CHANGE_POINT_B,
     CHANGE_POINT_C,
+    PATH_FREE,
     change_point_identities,
     crank_turns_fully,
+    path_branch,
     vector_kinematics,
 )
 
@@ -208,7 +211,8 @@ DECLARATION = Mechanism(
                "work)", "M_b"),
     ),
     profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1), from A->D", "φ1"),
-    profile_coordinate=lambda method: cell_midpoints(method.profile_points, 2.0 * np.pi),
+    profile_coordinate=lambda method: cell_midpoints(
+        method.profile_points, (2 if method.path == PATH_FREE else 1) * 2.0 * np.pi),
     status=("ok", "not_assemblable", "special_position", "nonfinite", "degenerate",
             "second_special_position", "no_special_position"),
     usable=("special_position", "second_special_position"),
@@ -223,8 +227,8 @@ DECLARATION = Mechanism(
         Quantity("peak_samples", "1", "crank angles sampled to find each peak, which is "
                  "then refined to the exact maximum", default=361, minimum=3,
                  maximum=10**6, integer=True),
-        Quantity("profile_points", "1", "crank angles of the profiles (0: no profiles)",
-                 default=0, minimum=0, maximum=100000, integer=True),
+        path("the outputs and profiles ([GUIM] Fig. 4 draws the free one)"),
+        profile_points("crank angles of the profiles (0: no profiles)"),
     ),
 )
 P = DECLARATION.parameter_index
@@ -428,22 +432,26 @@ def peak_quantity(q, res):
 
 
 @njit(**KERNEL_OPTIONS)
-def _forces_at(phi, pr, sigma, res, tol, base):
+def _forces_at(phi, pr, branch, res, tol, base):
     """dyad_reactions at crank angle phi with the base state ``base`` (gx, gy, Omega_b, E_b)
-    computed once for the point, or anew at each angle where the base moves (harmonic)."""
+    computed once for the point, or anew at each angle where the base moves (harmonic), on
+    the branch the path takes there: branch = (sigma, node, count, path) as
+    kernels.fourbar.path_branch reads them."""
     if pr[P.base_motion] == BASE_HARMONIC:
         gx, gy, wb, eb = base_state(phi, pr)
     else:
         gx, gy, wb, eb = base
-    return dyad_reactions(phi, pr, sigma, res, tol, gx, gy, wb, eb)
+    sigma, node, count, path = branch
+    return dyad_reactions(phi, pr, path_branch(phi, sigma, node, count, path), res, tol, gx,
+                          gy, wb, eb)
 
 
 @njit(**KERNEL_OPTIONS)
 def _peak_at(phi, data):
     """Quantity q at crank angle phi (NaN where the loop cannot close); data as packed by
     _point."""
-    q, pr, sigma, res, tol, base = data
-    if not _forces_at(phi, pr, sigma, res, tol, base):
+    q, pr, branch, res, tol, base = data
+    if not _forces_at(phi, pr, branch, res, tol, base):
         return math.nan
     return peak_quantity(q, res)
 
@@ -501,6 +509,10 @@ def design(i, pr, settings, out, prof):
     turns = base_turns(pr)  # the outputs' cycle: the crank turns after which all repeats
     if turns == 0:
         return S.nonfinite
+    free = settings.path == PATH_FREE and kind != 0
+    if free and turns % 2 == 1:
+        turns *= 2  # the free path repeats after two crank turns
+    branch = (sigma, start, count if kind != 0 else 0, settings.path)
 
     # cycle work and RMS of M_b: Gauss-Legendre on each open piece between special
     # positions (M_b jumps at a node: one-sided there, never integrated across), over the
@@ -513,7 +525,7 @@ def design(i, pr, settings, out, prof):
         for piece in range(pieces):
             left = start + 2.0 * math.pi * turn + 2.0 * half * piece
             for k in range(gl_x.shape[0]):
-                if not _forces_at(left + half * (gl_x[k] + 1.0), pr, sigma, res, tol, base):
+                if not _forces_at(left + half * (gl_x[k] + 1.0), pr, branch, res, tol, base):
                     return S.not_assemblable
                 work += half * gl_w[k] * res[R_MB]
                 square += half * gl_w[k] * res[R_MB] * res[R_MB]
@@ -532,12 +544,12 @@ def design(i, pr, settings, out, prof):
                                   max(3, n_peak // lows.shape[0]), int(CLUSTER))
             values = np.empty((N_PEAKS, xs.shape[0]))
             for j in range(xs.shape[0]):
-                if not _forces_at(xs[j], pr, sigma, res, tol, base):
+                if not _forces_at(xs[j], pr, branch, res, tol, base):
                     return S.not_assemblable
                 for q in range(N_PEAKS):
                     values[q, j] = peak_quantity(q, res)
             for q in range(N_PEAKS):
-                best[q] = max(best[q], _refine_peak((q, pr, sigma, res, tol, base), xs,
+                best[q] = max(best[q], _refine_peak((q, pr, branch, res, tol, base), xs,
                                                     values[q], PEAK_LOCATION))
     for q in range(N_PEAKS):
         out[PEAK_ROWS[q]] = best[q]
@@ -546,13 +558,11 @@ def design(i, pr, settings, out, prof):
     for j in range(prof_angles.shape[0]):
         phi = prof_angles[j]
         at_node = False
-        if kind != 0:
-            for node in (start, start + 2.0 * math.pi, start - 2.0 * math.pi):
-                if abs(phi - node) < 1e-12:
-                    at_node = True
-            if count > 1 and abs(phi - start - math.pi) < 1e-12:
-                at_node = True
-        if at_node or not _forces_at(phi, pr, sigma, res, tol, base):
+        if kind != 0:  # nodes every 2 pi / count from start
+            spacing = 2.0 * math.pi / (2 if count > 1 else 1)
+            offset = (phi - start) % spacing
+            at_node = min(offset, spacing - offset) < 1e-12
+        if at_node or not _forces_at(phi, pr, branch, res, tol, base):
             continue
         prof[F.F21_n, j], prof[F.F21_t, j] = res[R_F21N], res[R_F21T]
         prof[F.F34_n, j], prof[F.F34_t, j] = res[R_F34N], res[R_F34T]
@@ -573,7 +583,7 @@ def design(i, pr, settings, out, prof):
 #: the method's options the block reads, by name, and its scratch (res: one angle's
 #: result vector, N_RESULT)
 Settings = namedtuple("Settings", ["geometry_tol", "window", "gl_x", "gl_w", "n_peak",
-                                   "angles", "res"])
+                                   "angles", "res", "path"])
 
 
 #: the block: each design of it by ``design`` (kernels/block.py), cached on disk
@@ -583,7 +593,7 @@ linkage_forces_block = design_block(design, "linkage_forces_block", globals(), K
 def run(params, method):
     """Entry point: (outputs, status, profiles[n_profiles, n, n_angles])."""
     gl_x, gl_w = np.polynomial.legendre.leggauss(method.quadrature_points)
-    angles = cell_midpoints(method.profile_points, 2.0 * np.pi)
+    angles = DECLARATION.profile_coordinate(method)
     n = params.shape[1]
     out = np.empty((len(O), n))
     status = np.empty(n, dtype=np.int8)
@@ -591,6 +601,6 @@ def run(params, method):
     settings = Settings(geometry_tol=float(method.geometry_tol),
                         window=float(method.special_window), gl_x=gl_x, gl_w=gl_w,
                         n_peak=int(method.peak_samples), angles=angles,
-                        res=np.empty(N_RESULT))
+                        res=np.empty(N_RESULT), path=int(method.path))
     linkage_forces_block(np.ascontiguousarray(params), settings, out, status, prof)
     return out, status, prof

@@ -713,13 +713,19 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
         if angle and against is None:
             _angle_ticks(ax, degrees)
             for value, kind in _angle_marks(point):
-                if np.isfinite(value):
-                    shown = np.degrees(value) if degrees else value
-                    period = 360.0 if degrees else 2 * np.pi
-                    while shown > x.max() + 1e-9:  # marks of a 4 pi cycle on a 2 pi profile
-                        shown -= period
-                    ax.axvline(shown, color="0.3", lw=0.8, ls=":")
-                    ax.annotate(kind, (shown, 1.0), xycoords=("data", "axes fraction"),
+                if not np.isfinite(value):
+                    continue
+                shown = np.degrees(value) if degrees else value
+                period = 360.0 if degrees else 2 * np.pi
+                while shown > x.max() + 1e-9:  # marks of a 4 pi cycle on a 2 pi profile
+                    shown -= period
+                # a special position recurs every turn (a free path's profile has two)
+                every = [shown + k * period for k in range(int(np.ptp(x) // period) + 2)
+                         if shown + k * period <= x.max() + 1e-9] if "special" in kind \
+                    else [shown]
+                for where_at in every:
+                    ax.axvline(where_at, color="0.3", lw=0.8, ls=":")
+                    ax.annotate(kind, (where_at, 1.0), xycoords=("data", "axes fraction"),
                                 fontsize=7, rotation=90, va="top", ha="right")
         ax.grid(True, which="both", alpha=0.3)
         if len(group) > 1:
