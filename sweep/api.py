@@ -624,7 +624,8 @@ def lines(atlas: AtlasLike, x: str, y: list[str] | str, *, by: str | None = None
 
 def profile(atlas: AtlasLike, variables: list[str] | str, where: str | None = None, *,
             path: str | os.PathLike | None = None, degrees: bool = True,
-            force: bool = False, against: str | None = None) -> Figure:
+            force: bool = False, against: str | None = None,
+            each: str | None = None, every: bool = False) -> Figure:
     """Profiles (values over the crank angle, e.g. joint reactions) at one grid point.
 
     Parameters:
@@ -636,6 +637,10 @@ def profile(atlas: AtlasLike, variables: list[str] | str, where: str | None = No
         force: overwrite an existing PNG.
         against: a profile for the x axis instead of the crank angle (e.g. the six-link's
             rocker_angle against link3_angle, [SIX] Fig. 6).
+        each: a grid axis: one curve per value of it, the other axes held at the point
+            ``where`` picks (e.g. ``"type"``).
+        every: one curve per grid point matching ``where`` (at most 12; [CR] Fig. 2's
+            three mechanisms).
 
     Returns:
         The ``matplotlib.figure.Figure``, one panel per unit; ``fig.grid_point`` says which
@@ -655,7 +660,7 @@ def profile(atlas: AtlasLike, variables: list[str] | str, where: str | None = No
         else list(variables)
     with reading(ds):
         fig, fig.grid_point = profile_figure(ds, [n for n in names if n], where, degrees,
-                                             against=against)
+                                             against=against, each=each, every=every)
     if out is not None:
         save_figure(fig, out)
     return fig

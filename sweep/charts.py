@@ -20,6 +20,7 @@ marks, axes), then the key (``_key``: colour bar or legend) and the title (``_ti
 from __future__ import annotations
 
 import datetime as _dt
+import itertools
 from pathlib import Path
 from typing import NamedTuple
 
@@ -28,7 +29,7 @@ import xarray as xr
 
 from sweep import labels, palettes
 from sweep.errors import UserError
-from sweep.selection import first_point, flag_names, take_at
+from sweep.selection import first_point, flag_names, matching_points, take_at
 
 #: panels per row of a chart with one panel per value of another axis
 PANELS_PER_ROW = 3
@@ -651,16 +652,19 @@ def _angle_ticks(ax, degrees: bool) -> None:
 
 
 def profile_chart(ds: xr.Dataset, names: list[str], where: str | None, out: Path,
-                  degrees: bool = True, against: str | None = None) -> tuple:
+                  degrees: bool = True, against: str | None = None,
+                  each: str | None = None, every: bool = False) -> tuple:
     """``profile_figure`` saved as a PNG at ``out``; (out, the grid point's description)."""
-    fig, where_text = profile_figure(ds, names, where, degrees, against=against)
+    fig, where_text = profile_figure(ds, names, where, degrees, against=against, each=each,
+                                     every=every)
     fig.savefig(out, dpi=110)
     return out, where_text
 
 
 def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
                    degrees: bool = True, at: dict | None = None,
-                   against: str | None = None) -> tuple:
+                   against: str | None = None, each: str | None = None,
+                   every: bool = False) -> tuple:
     """Profiles of ``names`` over the profile dimension at the first grid point matching
     ``where``, as (Figure, the grid point in words). One panel per unit, stacked over a
     shared angle axis (N and N m on one axis would flatten the smaller); where a profile
@@ -668,12 +672,59 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
     cycle. Angles on both axes in degrees, or both in radians; the angle axis ticks every
     90° (or pi/2); the crank angles of special positions and impacts the atlas records are
     marked. ``at``: the grid point {dim: index} instead of ``where``. ``against``: another
-    profile on the x axis instead of the profile dimension (phi5 against phi3)."""
+    profile on the x axis instead of the profile dimension (phi5 against phi3). ``each``: a
+    grid axis, one curve per value of it at the point's other values. ``every``: one curve
+    per grid point matching ``where`` (at most MAX_CURVES; [CR] Fig. 2's three
+    mechanisms)."""
     from matplotlib.figure import Figure
 
+    grid_dims = list(ds["status"].dims)
+    pdim = _profile_dimension(ds, names, grid_dims, against, each)
+    if every:
+        picks = matching_points(ds, where)
+        if len(picks) > MAX_CURVES:
+            raise UserError(f"where: {len(picks)} grid points match; one curve each is at "
+                            f"most {MAX_CURVES}")
+    else:
+        at = first_point(ds, where) if at is None else at
+        picks = [at] if each is None else [{**at, each: k} for k in range(ds.sizes[each])]
+    points = [ds.isel(pick) for pick in picks]
+    point = points[0]
+    # the axes the curves differ in (each's, or those of the matching points) name them
+    varying = [d for d in grid_dims if len({pick[d] for pick in picks}) > 1]
+    by_unit: dict[str, list[str]] = {}
+    for name in names:
+        by_unit.setdefault(labels.units(point, name, degrees), []).append(name)
+    fig = Figure(figsize=(8, 2.0 + 2.6 * len(by_unit)), layout="constrained")
+    axes = fig.subplots(len(by_unit), 1, sharex=True, squeeze=False)[:, 0]
+    xname = against or pdim
+    for ax, (units, group) in zip(axes, by_unit.items()):
+        _profile_panel(ax, ds, points, group, units, xname, degrees, varying)
+        if point[xname].attrs.get("units") == "rad" and against is None:
+            _angle_ticks(ax, degrees)
+            if len(points) == 1:  # each design has its own events
+                _mark_events(ax, point, labels.shown_values(point[xname], degrees), degrees)
+    axes[-1].set_xlabel(labels.axis_label(ds, xname, degrees))
+    held = [d for d in grid_dims if d not in varying]
+    at_text = design_text(point, held, degrees) if held else ""
+    fig.suptitle(labels.wrapped(
+        f"{', '.join(labels.label(ds, n) for n in names)} "
+        f"{'against' if against else 'over'} {labels.label(ds, xname)}"
+        + (f", one curve per {', '.join(labels.label(ds, d) for d in varying)}"
+           if varying else "")
+        + (f", at {at_text}" if at_text else ""), 100), fontsize=9)
+    where_text = design_text(point, held, degrees, plain=True) if held else "every point"
+    caption = ds.attrs.get("title", "")
+    fig.suptitle(fig.get_suptitle() + "\n" + labels.wrapped(
+        f"{caption} · {made_by()}" if caption else made_by(), 110), fontsize=9)
+    return fig, where_text
+
+
+def _profile_dimension(ds: xr.Dataset, names: list[str], grid_dims: list[str],
+                       against: str | None, each: str | None) -> str:
+    """The profiles' own dimension, after checking the names, ``against`` and ``each``."""
     if not names:
         raise UserError("variables: give at least one profile variable")
-    grid_dims = list(ds["status"].dims)
     for name in names:
         if name not in ds.data_vars:
             raise UserError(f"variables: unknown variable {name!r}")
@@ -684,64 +735,67 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
     if against is not None and (against not in ds.data_vars or pdim not in ds[against].dims):
         raise UserError(f"against: {against!r} is not a profile of this atlas; allowed: "
                         + ", ".join(n for n in ds.data_vars if pdim in ds[n].dims))
-    if at is None:
-        at = first_point(ds, where)
-    point = ds.isel(at)
-    by_unit: dict[str, list[str]] = {}
-    for name in names:
-        by_unit.setdefault(labels.units(point, name, degrees), []).append(name)
-    fig = Figure(figsize=(8, 2.0 + 2.6 * len(by_unit)), layout="constrained")
-    axes = fig.subplots(len(by_unit), 1, sharex=True, squeeze=False)[:, 0]
-    xname = against or pdim
-    angle = point[xname].attrs.get("units") == "rad"
-    x = labels.shown_values(point[xname], degrees, ds if against else None)
-    for ax, (units, group) in zip(axes, by_unit.items()):
-        scale = []
-        for name, colour in zip(group, palettes.CATEGORY_COLOURS):
-            y = labels.shown_values(point[name], degrees, ds)
-            ax.plot(x, y, lw=1.1, color=colour, label=labels.label(ds, name))
+    if each is not None and each not in grid_dims:
+        raise UserError(f"each: {each!r} is not a grid axis of this atlas; allowed: "
+                        + ", ".join(grid_dims))
+    return pdim
+
+
+#: curves one profile chart draws at most (one per grid point)
+MAX_CURVES = 12
+
+
+def _profile_panel(ax, ds: xr.Dataset, points: list, group: list[str], units: str,
+                   xname: str, degrees: bool, varying: list[str]) -> None:
+    """One unit's curves: each variable at each point (colour by curve), the y axis
+    labelled, symmetric-log where a spike would flatten the rest, a legend for several."""
+    curves = [(name, p) for p in points for name in group]
+    scale, top = [], 0.0
+    for (name, p), colour in zip(curves, itertools.cycle(palettes.CATEGORY_COLOURS)):
+        x = labels.shown_values(p[xname], degrees, ds if xname in ds.data_vars else None)
+        y = labels.shown_values(p[name], degrees, ds)
+        text = labels.label(ds, name)
+        if varying:
+            value = design_text(p, varying, degrees)
+            text = f"{text}, {value}" if len(group) > 1 else value
+        ax.plot(x, y, lw=1.1, color=colour, label=text)
+        if np.isfinite(y).any():
             scale.append(np.nanmedian(np.abs(y)))
-        top = max(float(np.nanmax(np.abs(labels.shown_values(point[n], degrees, ds))))
-                  for n in group)
-        typical = max(1e-300, float(np.nanmax(scale)))
-        name = (labels.axis_label(ds, group[0], degrees) if len(group) == 1 else
-                f"{QUANTITY_OF_UNITS.get(units, 'value')} [{labels.pretty_units(units)}]")
-        if top > 100 * typical:  # a spike (1/dphi1 reactions): a log scale shows it and the rest
-            ax.set_yscale("symlog", linthresh=typical)
-            name += ", symlog"
-        ax.set_ylabel(labels.wrapped(name, 34))
-        if angle and against is None:
-            _angle_ticks(ax, degrees)
-            for value, kind in _angle_marks(point):
-                if not np.isfinite(value):
-                    continue
-                shown = np.degrees(value) if degrees else value
-                period = 360.0 if degrees else 2 * np.pi
-                while shown > x.max() + 1e-9:  # marks of a 4 pi cycle on a 2 pi profile
-                    shown -= period
-                # a special position recurs every turn (a free path's profile has two)
-                every = [shown + k * period for k in range(int(np.ptp(x) // period) + 2)
-                         if shown + k * period <= x.max() + 1e-9] if "special" in kind \
-                    else [shown]
-                for where_at in every:
-                    ax.axvline(where_at, color="0.3", lw=0.8, ls=":")
-                    ax.annotate(kind, (where_at, 1.0), xycoords=("data", "axes fraction"),
-                                fontsize=7, rotation=90, va="top", ha="right")
-        ax.grid(True, which="both", alpha=0.3)
-        if len(group) > 1:
+            top = max(top, float(np.nanmax(np.abs(y))))
+    typical = max(1e-300, float(np.nanmax(scale)) if scale else 1.0)
+    name = (labels.axis_label(ds, group[0], degrees) if len(group) == 1 else
+            f"{QUANTITY_OF_UNITS.get(units, 'value')} [{labels.pretty_units(units)}]")
+    if top > 100 * typical:  # a spike (1/dphi1 reactions): a log scale shows it and the rest
+        ax.set_yscale("symlog", linthresh=typical)
+        name += ", symlog"
+    ax.set_ylabel(labels.wrapped(name, 34))
+    ax.grid(True, which="both", alpha=0.3)
+    if len(curves) > 1:  # beside the panel, or under it where the names are long
+        handles, texts = ax.get_legend_handles_labels()
+        if max(len(t) for t in texts) > 30:
+            ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12),
+                      frameon=False, ncol=1)
+        else:
             ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
                       frameon=False)
-    axes[-1].set_xlabel(labels.axis_label(ds, xname, degrees))
-    fig.suptitle(labels.wrapped(f"{', '.join(labels.label(ds, n) for n in names)} "
-                                f"{'against' if against else 'over'} "
-                                f"{labels.label(ds, xname)}, at "
-                                f"{design_text(point, grid_dims, degrees)}", 100),
-                 fontsize=9)
-    where_text = design_text(point, grid_dims, degrees, plain=True)
-    caption = ds.attrs.get("title", "")
-    fig.suptitle(fig.get_suptitle() + "\n" + labels.wrapped(
-        f"{caption} · {made_by()}" if caption else made_by(), 110), fontsize=9)
-    return fig, where_text
+
+
+def _mark_events(ax, point: xr.Dataset, x: np.ndarray, degrees: bool) -> None:
+    """Dotted lines at the crank angles of the special positions and impacts the point
+    records; a special position recurs every turn (a free path's profile has two)."""
+    period = 360.0 if degrees else 2 * np.pi
+    for value, kind in _angle_marks(point):
+        if not np.isfinite(value):
+            continue
+        shown = np.degrees(value) if degrees else value
+        while shown > x.max() + 1e-9:  # marks of a 4 pi cycle on a 2 pi profile
+            shown -= period
+        every = [shown + k * period for k in range(int(np.ptp(x) // period) + 2)
+                 if shown + k * period <= x.max() + 1e-9] if "special" in kind else [shown]
+        for where_at in every:
+            ax.axvline(where_at, color="0.3", lw=0.8, ls=":")
+            ax.annotate(kind, (where_at, 1.0), xycoords=("data", "axes fraction"),
+                        fontsize=7, rotation=90, va="top", ha="right")
 
 
 #: what a profile panel of several variables in one unit shows, by the unit

@@ -673,7 +673,8 @@ def lines(atlas_file, x, y, by, values, at, output, radians, force):
                             "--where 'omega1 == 30'",
                             "sweep profile six.nc --vars rocker_angle --radians",
                             "sweep profile six.nc --vars rocker_angle,transfer_stage2 "
-                            "--against link3_angle"))
+                            "--against link3_angle",
+                            "sweep profile cr.nc --vars transfer_ratio --each type"))
 @click.argument("atlas_file", metavar="ATLAS")
 @click.option("--vars", "names", required=True, help="comma-separated profile variables")
 @click.option("--where", default=None, help="condition picking the grid point (first match)")
@@ -682,8 +683,12 @@ def lines(atlas_file, x, y, by, values, at, output, radians, force):
 @click.option("--radians", is_flag=True, help="angles in radians, ticks at multiples of pi/2")
 @click.option("--against", default=None,
               help="a profile for the x axis instead of the crank angle")
+@click.option("--each", default=None,
+              help="a grid axis: one curve per value of it, the others held at --where")
+@click.option("--all", "every", is_flag=True,
+              help="one curve per grid point matching --where (at most 12)")
 @click.option("--force", is_flag=True, help="overwrite an existing PNG")
-def profile(atlas_file, names, where, output, radians, against, force):
+def profile(atlas_file, names, where, output, radians, against, each, every, force):
     """Chart of profiles (e.g. joint reactions over crank_angle) at one grid point: one
     panel per unit."""
     from sweep.selection import parse
@@ -694,7 +699,7 @@ def profile(atlas_file, names, where, output, radians, against, force):
         parse(where)
     with api.open_atlas(atlas_file) as ds:
         fig = api.profile(ds, names, where, path=output, degrees=not radians, force=force,
-                          against=against)
+                          against=against, each=each, every=every)
     click.echo(f"profile at {fig.grid_point}: {Path(output).resolve()}")
 
 

@@ -268,14 +268,30 @@ def take_at(ds: xr.Dataset, at: dict | None, grid: bool = False) -> tuple[xr.Dat
 def first_point(ds: xr.Dataset, where: str | None) -> dict:
     """The first grid point (C order) matching ``where`` (the first of all without one),
     as {dim: index}; a UserError where none does."""
+    return _points(ds, _hits(ds, where)[:1])[0]
+
+
+def matching_points(ds: xr.Dataset, where: str | None) -> list[dict]:
+    """Every grid point (C order) matching ``where`` (all without one), each as
+    {dim: index}; a UserError where none does."""
+    return _points(ds, _hits(ds, where))
+
+
+def _hits(ds: xr.Dataset, where: str | None) -> np.ndarray:
+    """Flat (C order) indices of the grid points matching ``where``; none is an error."""
     dims = list(ds["status"].dims)
     mask = np.asarray(evaluate(ds, where).broadcast_like(ds["status"]).transpose(*dims)
                       .values) if where else np.ones(ds["status"].shape, bool)
     hits = np.flatnonzero(mask)
     if not hits.size:
         raise UserError("where: no grid point matches")
-    return dict(zip(dims, (int(i) for i in np.unravel_index(int(hits[0]),
-                                                            ds["status"].shape))))
+    return hits
+
+
+def _points(ds: xr.Dataset, hits: np.ndarray) -> list[dict]:
+    dims = list(ds["status"].dims)
+    return [dict(zip(dims, (int(i) for i in np.unravel_index(int(hit), ds["status"].shape))))
+            for hit in hits]
 
 
 def flag_names(var: xr.DataArray) -> dict[int, str] | None:
