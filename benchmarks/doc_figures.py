@@ -8,7 +8,8 @@ folder. Each example's chart (what ``sweep run`` draws from its [chart]) is copi
 docs/ under the name the pages use, and the two profile charts are drawn with the same
 function as ``sweep profile``; the explorer's screenshot is the page of
 ``crank_rocker_limits`` in headless Chromium with the designs of at least 20 J a blow
-brushed. The work-precision and failure charts are made by
+brushed; the papers' figures are those of that page's blocks, run as written. The
+work-precision and failure charts are made by
 ``benchmarks/charts.py``.
 """
 
@@ -62,6 +63,7 @@ def main(folder: Path) -> None:
         print(f"docs/{name}: `sweep profile` of {example} at {where}")
     explorer_screenshot(folder)
     robust_figure(folder)
+    papers_figures(folder)
 
 
 def explorer_screenshot(folder: Path, name: str = "explorer.png") -> None:
@@ -98,6 +100,28 @@ def robust_figure(folder: Path, name: str = "robust_rock_band.png") -> None:
     sweep.chart(robust, "largest_link", "m3", "requirements", overlay="blow_energy_min",
                 path=DOCS / name, force=True)
     print(f"docs/{name}: the robust design guide's chart")
+
+
+def papers_figures(folder: Path) -> None:
+    """The figures of "The papers' figures", made by running that page's blocks as written
+    in ``folder`` (its TOML files, then its commands), and copied into docs/."""
+    import re
+    import shlex
+    import subprocess
+
+    page = (DOCS / "guide" / "papers_figures.md").read_text()
+    for kind, body in re.findall(r"```(toml|bash)\n(.*?)```", page, re.S):
+        if kind == "toml":
+            name = re.match(r"# file: (\S+)", body).group(1)
+            (folder / name).write_text(body)
+            continue
+        for line in body.strip().splitlines():
+            subprocess.run([str(Path(sys.executable).parent / "sweep"),
+                            *shlex.split(line)[1:]], cwd=folder, check=True,
+                           stdout=subprocess.DEVNULL)
+    for png in sorted(re.findall(r"\(\.\./(paper_[a-z0-9_]+\.png)\)", page)):
+        shutil.copyfile(folder / png, DOCS / png)
+        print(f"docs/{png}: the papers' figures page, as written")
 
 
 if __name__ == "__main__":

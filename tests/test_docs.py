@@ -112,7 +112,7 @@ def test_the_readme_is_a_front_door():
 #: tour, the tutorial, then the guides in the navigation's order
 WALK_THROUGHS = ["README.md", "docs/tutorial.md", "docs/guide/cli.md", "docs/guide/specs.md",
                  "docs/guide/boundaries.md", "docs/guide/deciding.md", "docs/guide/reading.md",
-                 "docs/guide/robust.md",
+                 "docs/guide/robust.md", "docs/guide/papers_figures.md",
                  *(f"docs/guide/{m}.md" for m in ("crank_rocker", "linkage_forces", "six_link",
                                                    "spring_balancer", "rotary_pendulum",
                                                    "impact_machine"))]
@@ -135,5 +135,7 @@ def test_the_walk_throughs_run_in_sequence_in_one_folder(tmp_path):
                  "breaker_pick.nc", "breaker_pick.png", "limits.html", "pick.html",
                  "breaker.html", "breaker_sheet.html", "breaker_sheet.pdf",
                  "breaker_pick_sheet.html", "breaker_explorer.html", "rock_band_robust.png",
-                 "rock_band_front.nc", "breaker_tolerance.png", "breaker_sensitivity.png"):
+                 "rock_band_front.nc", "breaker_tolerance.png", "breaker_sensitivity.png",
+                 "paper_cr_fig2.png", "paper_guim.png", "paper_six_fig4.png",
+                 "paper_six_fig6.png"):
         assert (tmp_path / name).is_file(), name
