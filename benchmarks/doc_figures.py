@@ -8,7 +8,8 @@ folder. Each example's chart (what ``sweep run`` draws from its [chart]) is copi
 docs/ under the name the pages use, and the two profile charts are drawn with the same
 function as ``sweep profile``; the explorer's screenshot is the page of
 ``crank_rocker_limits`` in headless Chromium with the designs of at least 20 J a blow
-brushed; the papers' figures are those of that page's blocks, run as written. The
+brushed; the papers' figures and [SIX]'s claim are drawn by their pages' blocks, run as
+written. The
 work-precision and failure charts are made by
 ``benchmarks/charts.py``.
 """
@@ -63,7 +64,8 @@ def main(folder: Path) -> None:
         print(f"docs/{name}: `sweep profile` of {example} at {where}")
     explorer_screenshot(folder)
     robust_figure(folder)
-    papers_figures(folder)
+    page_figures(folder, "papers_figures.md")
+    page_figures(folder, "six_link.md", "## Does the two-stage")
 
 
 def explorer_screenshot(folder: Path, name: str = "explorer.png") -> None:
@@ -102,15 +104,18 @@ def robust_figure(folder: Path, name: str = "robust_rock_band.png") -> None:
     print(f"docs/{name}: the robust design guide's chart")
 
 
-def papers_figures(folder: Path) -> None:
-    """The figures of "The papers' figures", made by running that page's blocks as written
-    in ``folder`` (its TOML files, then its commands), and copied into docs/."""
+def page_figures(folder: Path, page: str, section: str | None = None) -> None:
+    """The figures a guide page links (``../NAME.png``) that its own blocks draw, made by
+    running those blocks as written in ``folder`` (its TOML files, then its commands) from
+    the heading ``section`` on (the whole page without one), and copied into docs/."""
     import re
     import shlex
     import subprocess
 
-    page = (DOCS / "guide" / "papers_figures.md").read_text()
-    for kind, body in re.findall(r"```(toml|bash)\n(.*?)```", page, re.S):
+    text = (DOCS / "guide" / page).read_text()
+    if section is not None:
+        text = text[text.index(section):]
+    for kind, body in re.findall(r"```(toml|bash)\n(.*?)```", text, re.S):
         if kind == "toml":
             name = re.match(r"# file: (\S+)", body).group(1)
             (folder / name).write_text(body)
@@ -119,9 +124,10 @@ def papers_figures(folder: Path) -> None:
             subprocess.run([str(Path(sys.executable).parent / "sweep"),
                             *shlex.split(line)[1:]], cwd=folder, check=True,
                            stdout=subprocess.DEVNULL)
-    for png in sorted(re.findall(r"\(\.\./(paper_[a-z0-9_]+\.png)\)", page)):
-        shutil.copyfile(folder / png, DOCS / png)
-        print(f"docs/{png}: the papers' figures page, as written")
+    for png in sorted(set(re.findall(r"\(\.\./([a-z0-9_]+\.png)\)", text))):
+        if (folder / png).exists():
+            shutil.copyfile(folder / png, DOCS / png)
+            print(f"docs/{png}: drawn by the blocks of {page}, as written")
 
 
 if __name__ == "__main__":

@@ -473,6 +473,31 @@ def cycle_pieces(kind, count, window):
     return np.array([start + window]), np.array([start + 2.0 * math.pi - window])
 
 
+@njit(**KERNEL_OPTIONS)
+def cycle_peaks(pr, branch, res, tol, base, kind, count, window, n_peak, turns, best):
+    """The peaks of |F_A|, |F_B|, |F_C|, |F_D| and |M_b| over ``turns`` crank turns outside
+    |phi1 - node| < window (H11: F^n ~ 1/dphi1), into best (N_PEAKS, maxima with what it
+    holds), piece by piece: the window's edges, a sample clustered towards them, and golden
+    section on the exact kinetostatics around every sampled local maximum
+    (kernels/extrema.py). False where the loop cannot close."""
+    lows, highs = cycle_pieces(kind, count, window)
+    for turn in range(turns):
+        for piece in range(lows.shape[0]):
+            shift = 2.0 * math.pi * turn
+            xs = clustered_points(lows[piece] + shift, highs[piece] + shift,
+                                  max(3, n_peak // lows.shape[0]), int(CLUSTER))
+            values = np.empty((N_PEAKS, xs.shape[0]))
+            for j in range(xs.shape[0]):
+                if not _forces_at(xs[j], pr, branch, res, tol, base):
+                    return False
+                for q in range(N_PEAKS):
+                    values[q, j] = peak_quantity(q, res)
+            for q in range(N_PEAKS):
+                best[q] = max(best[q], _refine_peak((q, pr, branch, res, tol, base), xs,
+                                                    values[q], PEAK_LOCATION))
+    return True
+
+
 @njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): status, the scalar outputs (out) and the
@@ -532,25 +557,10 @@ def design(i, pr, settings, out, prof):
     out[O.balancing_moment_rms] = math.sqrt(square / (2.0 * math.pi * turns))
     out[O.cycle_work] = direction * work / turns  # energy delivered by the drive per turn
 
-    # peaks outside |phi1 - node| < window (H11: F^n ~ 1/dphi1), piece by piece: the
-    # window's edges, a sample clustered towards them, and golden section on the exact
-    # kinetostatics around every sampled local maximum (kernels/extrema.py)
-    lows, highs = cycle_pieces(kind, count, window)
+    # peaks outside the windows around the nodes
     best = np.full(N_PEAKS, -math.inf)
-    for turn in range(turns):
-        for piece in range(lows.shape[0]):
-            shift = 2.0 * math.pi * turn
-            xs = clustered_points(lows[piece] + shift, highs[piece] + shift,
-                                  max(3, n_peak // lows.shape[0]), int(CLUSTER))
-            values = np.empty((N_PEAKS, xs.shape[0]))
-            for j in range(xs.shape[0]):
-                if not _forces_at(xs[j], pr, branch, res, tol, base):
-                    return S.not_assemblable
-                for q in range(N_PEAKS):
-                    values[q, j] = peak_quantity(q, res)
-            for q in range(N_PEAKS):
-                best[q] = max(best[q], _refine_peak((q, pr, branch, res, tol, base), xs,
-                                                    values[q], PEAK_LOCATION))
+    if not cycle_peaks(pr, branch, res, tol, base, kind, count, window, n_peak, turns, best):
+        return S.not_assemblable
     for q in range(N_PEAKS):
         out[PEAK_ROWS[q]] = best[q]
 

@@ -35,7 +35,7 @@ from kernels.crank_rocker import impact_branch
 from kernels.declaration import (Mechanism, Output, Quantity, geometry_tol, peak_samples,
                                  profile_points)
 from kernels.extrema import CLUSTER, clustered_points, peak_search
-from kernels.fourbar import CHANGE_POINT_B
+from kernels.fourbar import CHANGE_POINT_B, PATH_IMPACT
 
 #: the stage geometry and drive, as six_link declares them
 _GEOMETRY = ("lambda2", "lambda3", "mu4", "mu5", "beta", "delta", "direction", "omega1",
@@ -49,7 +49,11 @@ _LENGTH = {1: 0.1, 2: 0.16, 3: 0.13, 4: 0.195, 5: 0.325}
 _LINK = {1: ("crank", "A", "AB"), 2: ("stage 1 coupler", "B", "BC"),
          3: ("link 3", "D", "DC"), 4: ("stage 2 coupler", "F", "FG"),
          5: ("rocker (striker)", "E", "EG")}
-_WINDOWED = ("outside |phi1 - phi1*| < special_window at stage 1's nodes and at the "
+_WINDOWED = ("outside |phi1 - phi1*| < special_window at stage 1's nodes and the "
+             "impacts' windows (special_window in link 3's angle)")
+#: a ratio's mark on a chart: below it the six-link carries less than the single four-bar
+_EQUAL = ((1.0, "1: as the single four-bar"),)
+_AT_BLOWS = ("outside a window of special_window in link 3's angle (phi3) at the "
              "impacts")
 #: the joints: (peak output's joint letter, force F_ij, what acts on what, the link it is
 #: resolved on)
@@ -75,6 +79,10 @@ LABELS = {
        for _, force, _, link in JOINTS for c, side in (("n", "along"), ("t", "across"))},
     "balancing_moment_peak": r"peak $|M_b|$", "balancing_moment_rms": r"RMS $M_b$",
     "cycle_work": "cycle work", "balancing_moment": "balancing moment $M_b$",
+    "single_stage_omega1": r"single four-bar $\omega_1$",
+    **{f"force_ratio_{j}": f"load at {j}, six-link / four-bar" for j in "FGE"},
+    "force_ratio_max": "largest load, six-link / four-bar",
+    "drive_torque_ratio": "drive torque, six-link / four-bar",
     "crank_angle": r"crank angle $\varphi_1$",
 }
 
@@ -116,14 +124,30 @@ DECLARATION = Mechanism(
     ),
     outputs=(
         *(Output(f"force_peak_{joint}", "N", f"peak |{force}| at {joint} over the 4 pi "
-                 "cycle", f"|{force}|max", _WINDOWED) for joint, force, _, _ in JOINTS),
+                 "cycle", f"|{force}|max", _WINDOWED if joint in "ABCD" else _AT_BLOWS)
+          for joint, force, _, _ in JOINTS),
         Output("balancing_moment_peak", "N m", "peak |M_b| over the 4 pi cycle (balancing "
-               "moment on the crank)", "|M_b|max", _WINDOWED),
+               "moment on the crank)", "|M_b|max", _AT_BLOWS),
         Output("balancing_moment_rms", "N m", "RMS of the balancing moment over the 4 pi "
                "cycle"),
         Output("cycle_work", "J", "work of the balancing moment over the 4 pi cycle (two "
                "blows; integral of M_b dphi1 along the motion)", "∮M_b dφ1", "equals the "
                "kinetic energy the two blows take at constant omega1"),
+        Output("single_stage_omega1", "rad s-1", "crank speed of the single impact four-bar "
+               "(stage 2 alone, its crank driven directly) with the same mean energy per "
+               "blow: |omega1| sqrt((u31_1^2 + u31_2^2)/2), u31 at the two blows", "ω1,single"),
+        *(Output(f"force_ratio_{joint}", "1", f"peak |{force}| at {joint} over the single "
+                 f"four-bar's peak at its {where} ([SIX]'s claim: below 1, lower loads)",
+                 f"|{force}|max ratio", _AT_BLOWS, marks=_EQUAL)
+          for joint, force, where in (("F", "F43", "crank pin"),
+                                      ("G", "F54", "coupler-rocker joint"),
+                                      ("E", "F56", "rocker pivot"))),
+        Output("force_ratio_max", "1", "the largest joint force peak of the six-link over "
+               "the single four-bar's (every joint of each)", "max |F| ratio", _WINDOWED,
+               marks=_EQUAL),
+        Output("drive_torque_ratio", "1", "peak balancing moment |M_b| of the six-link over "
+               "the single four-bar's (each crank does the same work a turn: one blow's "
+               "loss)", "|M_b|max ratio", _AT_BLOWS, marks=_EQUAL),
     ),
     profiles=(
         *ks.reaction_profiles(tuple((force, what, link) for _, force, what, link in JOINTS)),
@@ -156,6 +180,10 @@ FB = ks.DECLARATION.parameter_index
 PEAK_ROWS = (O.force_peak_A, O.force_peak_B, O.force_peak_C, O.force_peak_D,
              O.force_peak_F, O.force_peak_G, O.force_peak_E, O.balancing_moment_peak)
 N_PEAKS = 8
+#: the peaks windowed at every break (stage 1's joints A, B, C, D), and those windowed at
+#: the blows only (stage 2's joints F, G, E and M_b)
+STAGE1_PEAKS = (0, 1, 2, 3)
+BLOW_PEAKS = (4, 5, 6, 7)
 N_OUTPUTS = len(DECLARATION.outputs)
 #: golden section brackets a peak's crank angle to this [rad]
 PEAK_LOCATION = 1e-9
@@ -224,14 +252,45 @@ def peak_quantity(q, st):
 
 
 @njit(**KERNEL_OPTIONS)
+def solve_near(phi1, st):
+    """solve at phi1, or where that is exactly one of stage 1's nodes (u'31 is 0/0 there),
+    at phi1 + 1e-9 on the smooth path: its limit."""
+    return solve(phi1, st) or solve(phi1 + 1e-9, st)
+
+
+@njit(**KERNEL_OPTIONS)
 def _peak_at(phi, data):
     q, st = data
-    if not solve(phi, st):
+    if not solve_near(phi, st):
         return math.nan
     return peak_quantity(q, st)
 
 
 _golden_peak, _refine_peak = peak_search(_peak_at)
+
+
+@njit(**KERNEL_OPTIONS)
+def windowed_peaks(st, breaks, windows, n_peak, quantities, best):
+    """The peaks of ``quantities`` (rows of peak_quantity) on the pieces between the
+    increasing ``breaks``, outside |phi1 - breaks[k]| < windows[k], into best: a sample
+    clustered towards the windows' edges, golden section around every sampled local maximum
+    (kernels/extrema.py). False where a loop cannot close."""
+    for piece in range(breaks.shape[0] - 1):
+        a, b = breaks[piece] + windows[piece], breaks[piece + 1] - windows[piece + 1]
+        if b <= a:
+            continue
+        n = max(8, int(n_peak * (b - a) / (2.0 * TWO_PI)))
+        xs = clustered_points(a, b, n, int(CLUSTER))
+        values = np.empty((len(quantities), xs.shape[0]))
+        for j in range(xs.shape[0]):
+            if not solve_near(xs[j], st):
+                return False
+            for k in range(len(quantities)):
+                values[k, j] = peak_quantity(quantities[k], st)
+        for k in range(len(quantities)):
+            q = quantities[k]
+            best[q] = max(best[q], _refine_peak((q, st), xs, values[k], PEAK_LOCATION))
+    return True
 
 
 @njit(**KERNEL_OPTIONS)
@@ -271,7 +330,14 @@ def forces_point(pr, settings, out, prof):
                 (-g * math.sin(tilt + beta), -g * math.cos(tilt + beta)), pr1, pr2,
                 settings.res1, settings.res2)
     impacts = sl.impact_angles(lam6, lam2, lam3, delta - beta, tol)
+    # link 3's ratio at each blow: the single four-bar's speed for the same mean blow
+    blow_u31 = np.empty(2)
     for j in range(2):
+        m = round(impacts[j] / TWO_PI)
+        u31 = sl.stage1(impacts[j], lam6, lam2, lam3, tol)[1]
+        if math.isnan(u31) or abs(impacts[j] - TWO_PI * m) < 1e-12:  # on stage 1's node
+            u31 = sl.stage1_node_value(m, lam6, math.sqrt(lam6 * lam2 / lam3))
+        blow_u31[j] = u31
         impacts[j] = impacts[j] % (2.0 * TWO_PI)
     breaks = cycle_breaks(impacts)
 
@@ -293,27 +359,27 @@ def forces_point(pr, settings, out, prof):
     out[O.balancing_moment_rms] = math.sqrt(square / (2.0 * TWO_PI))
     out[O.cycle_work] = direction * work
 
-    # peaks outside the windows, piece by piece: a sample clustered towards the windows'
-    # edges, golden section around every sampled local maximum (kernels/extrema.py)
+    # peaks outside the windows: stage 1's joints at every break (their dyad is singular at
+    # stage 1's nodes, and they carry stage 2's load at the blows), stage 2's joints and M_b
+    # at the blows only (link 3 passes stage 1's nodes smoothly)
+    # A blow's window is special_window in link 3's angle (phi3), as the single four-bar's
+    # in its crank's: both stage 2s are then as near their singular dyad at its edges.
     window, n_peak = settings.window, settings.n_peak
+    first = 0 if impacts[0] <= impacts[1] else 1
+    blows = np.array([impacts[first], impacts[1 - first], impacts[first] + 2.0 * TWO_PI])
+    at_blows = np.array([window / blow_u31[first], window / blow_u31[1 - first],
+                         window / blow_u31[first]])
+    windows = np.empty(breaks.shape[0])
+    for k in range(breaks.shape[0]):
+        windows[k] = window
+        for j in range(2):
+            if breaks[k] == impacts[j]:
+                windows[k] = max(window, at_blows[0 if j == first else 1])
     best = np.full(N_PEAKS, -math.inf)
-    values = np.empty((N_PEAKS, n_peak + 8))
-    for piece in range(breaks.shape[0] - 1):
-        a, b = breaks[piece] + window, breaks[piece + 1] - window
-        if b <= a:
-            continue
-        n = max(8, int(n_peak * (b - a) / (2.0 * TWO_PI)))
-        xs = clustered_points(a, b, n, int(CLUSTER))
-        if values.shape[1] < xs.shape[0]:
-            values = np.empty((N_PEAKS, xs.shape[0]))
-        for j in range(xs.shape[0]):
-            if not solve(xs[j], st):
-                return S.not_assemblable
-            for q in range(N_PEAKS):
-                values[q, j] = peak_quantity(q, st)
-        for q in range(N_PEAKS):
-            best[q] = max(best[q], _refine_peak((q, st), xs, values[q, :xs.shape[0]],
-                                                PEAK_LOCATION))
+    if not windowed_peaks(st, breaks, windows, n_peak, STAGE1_PEAKS, best):
+        return S.not_assemblable
+    if not windowed_peaks(st, blows, at_blows, n_peak, BLOW_PEAKS, best):
+        return S.not_assemblable
     for q in range(N_PEAKS):
         out[PEAK_ROWS[q]] = best[q]
 
@@ -335,6 +401,27 @@ def forces_point(pr, settings, out, prof):
         prof[F.F54_n, j], prof[F.F54_t, j] = res2[ks.R_F32N], res2[ks.R_F32T]
         prof[F.F56_n, j], prof[F.F56_t, j] = res2[ks.R_F34N], res2[ks.R_F34T]
         prof[F.balancing_moment, j] = res1[ks.R_MB]
+
+    # [SIX]'s claim: stage 2 alone, driven directly at the speed that gives the same mean
+    # energy per blow, with the same links 4 and 5 (its crank massless, as link 3's arm)
+    w_single = w1 * math.sqrt(0.5 * np.sum(blow_u31 ** 2))
+    single = np.full(ks.N_PEAKS, -math.inf)
+    pr2[FB.omega1], pr2[FB.epsilon1] = w_single, 0.0
+    g2x, g2y = st.gravity2
+    if not ks.cycle_peaks(pr2, (st.sigma2, 0.0, 1, PATH_IMPACT), st.res2, tol,
+                          (g2x, g2y, 0.0, 0.0), int(CHANGE_POINT_B), 1, window, n_peak // 2,
+                          1, single):
+        return S.not_assemblable
+    out[O.single_stage_omega1] = abs(w_single)
+    out[O.force_ratio_F] = out[O.force_peak_F] / single[ks.PEAK_B]
+    out[O.force_ratio_G] = out[O.force_peak_G] / single[ks.PEAK_C]
+    out[O.force_ratio_E] = out[O.force_peak_E] / single[ks.PEAK_D]
+    six_max = 0.0
+    for q in range(N_PEAKS - 1):
+        six_max = max(six_max, out[PEAK_ROWS[q]])
+    out[O.force_ratio_max] = six_max / max(single[ks.PEAK_A], single[ks.PEAK_B],
+                                           single[ks.PEAK_C], single[ks.PEAK_D])
+    out[O.drive_torque_ratio] = out[O.balancing_moment_peak] / single[ks.PEAK_MB]
 
     for k in range(N_OUTPUTS):
         if not math.isfinite(out[k]):

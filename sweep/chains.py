@@ -83,6 +83,25 @@ MAPPINGS = {
         own=("crank_length", "omega1"),
         own_why="the source's crank length and speed are its second stage's; these are the "
                 "first stage's, whose ratio to the second's varies over the cycle"),
+    ("crank_rocker", "six_link_forces"): Mapping(
+        # the source's striker linkage as stage 2, its rocker's inertia about the pivot as
+        # J5 with no mass (as for linkage_forces); the single four-bar the outputs compare
+        # with is then the source's linkage at the same mean energy per blow
+        {"mu4": "lambda2", "mu5": "lambda3"}, requires='type == "b"',
+        why="six_link_forces' second stage is a type b four-bar (largest rocker): mu4 = "
+            "lambda2, mu5 = lambda3, its base 1 - mu4 + mu5 = lambda0",
+        optional={"J5": "rocker_inertia", "m5": "0 * rocker_inertia"},
+        own=("crank_length", "omega1", "m1", "m2", "m3", "m4", "J1", "J2", "J3", "J4"),
+        own_why="the source's crank is the second stage's and it models no link mass but "
+                "the rocker's"),
+    ("six_link", "crank_rocker"): Mapping(
+        # the reverse: the six-link's second stage alone, its crank (link 3) driven directly
+        # at the speed of the same mean energy per blow
+        {"type": '"general"', "lambda0": "1 - mu4 + mu5", "lambda2": "mu4", "lambda3": "mu5",
+         "crank_length": "lambda3 * crank_length",
+         "omega1": "omega1 * sqrt((transfer_stage1_impact_1 ** 2 "
+                   "+ transfer_stage1_impact_2 ** 2) / 2)"},
+        optional={"rocker_inertia": "rocker_inertia"}),
 }
 
 

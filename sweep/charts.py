@@ -108,12 +108,6 @@ def _number(value: float) -> str:
     return f"{value:,.0f}" if "e+" in text else text
 
 
-def _marks(ds: xr.Dataset, name: str) -> tuple:
-    """The declared (value, meaning) levels of an output (from the mechanism's declaration)."""
-    output = labels.declared(ds, name)
-    return getattr(output, "marks", ()) if output is not None else ()
-
-
 def design_chart(ds: xr.Dataset, x: str, y: str, color: str, out: Path,
                  ok_only: bool = True, degrees: bool = True, at: dict | None = None,
                  boundaries: xr.Dataset | None = None, overlay: str | None = None) -> Drawn:
@@ -318,7 +312,7 @@ def _colouring(ds, color, ok_only, degrees, cmap_name) -> Colouring:
     if log_colour and levels.size < 3:
         levels = np.asarray(ticker.LogLocator(subs=(1.0, 3.0)).tick_values(vmin, vmax))
         levels = levels[(levels > vmin) & (levels < vmax)]
-    marks = _marks(ds, color)
+    marks = labels.marks(ds, color)
     levels = levels[~np.isin(levels, [value for value, _ in marks])]  # drawn as marks
     return Colouring(xr.DataArray(shown, dims=var.dims), has_value, cmap, norm, False, [],
                      levels, marks)

@@ -17,6 +17,13 @@ import xarray as xr
 _SUPERSCRIPT = str.maketrans("0123456789-", "⁰¹²³⁴⁵⁶⁷⁸⁹⁻")
 
 
+def marks(ds: xr.Dataset, name: str) -> tuple:
+    """The declared (value, meaning) levels an output is read against (K = 1), from the
+    mechanism's declaration; () for any other variable."""
+    output = declared(ds, name)
+    return getattr(output, "marks", ()) if output is not None else ()
+
+
 def declared(ds: xr.Dataset, name: str):
     """The declaration of an atlas variable's output (or parameter), or None (status, a
     coordinate of a chain, an atlas of an unknown mechanism)."""

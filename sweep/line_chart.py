@@ -102,6 +102,10 @@ def figure(ds: xr.Dataset, x: str, ys: list[str], by: str | None = None, values=
                 colour = cmap(0.1 + 0.8 * n / max(1, len(families) - 1))
                 name = labels.value_text(ds, by, held[by].values[k], degrees)
             panel.plot(xs, values_y, color=colour, lw=1.4, label=name)
+        for level, meaning in labels.marks(ds, y):  # the levels it is read against (K = 1)
+            panel.axhline(level, color="0.3", lw=0.9, ls="--")
+            panel.annotate(meaning, (0.01, level), xycoords=("axes fraction", "data"),
+                           fontsize=7, va="bottom", color="0.3")
         panel.set_ylabel(labels.wrapped(labels.axis_label(ds, y, degrees), 36))
         panel.grid(True, alpha=0.3)
     axes[-1].set_xlabel(labels.axis_label(ds, x, degrees))

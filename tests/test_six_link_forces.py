@@ -293,25 +293,75 @@ def test_power_balance_and_cycle_work_equal_the_blows_energy(seed):
 
 
 def test_the_peaks_are_the_maxima_of_a_dense_newton_euler_sampling():
-    """Each joint's peak and |M_b|'s, outside the windows, against the largest of 3,000
-    Newton-Euler solves spread over the same pieces: never below it, and above it by no more
-    than the sampling's own gap."""
+    """Each joint's peak and |M_b|'s against the largest of 3,000 Newton-Euler solves spread
+    over the same pieces: never below it, and above it by no more than the sampling's own
+    gap. The windows: special_window in link 3's angle at each blow (in phi1: over u31
+    there), and for stage 1's joints special_window at its nodes too."""
     rng = np.random.default_rng(6464)
     design = random_design(rng)
     window = 0.05
     ds = atlas(design, special_window=window)
     mech = SixLink(design)
-    breaks = sorted(mech.breaks())
+    nodes, blows = mech.breaks()[:3], mech.breaks()[3:]
+    at_blow = [window / sl.stage1(b, mech.lam6, design["lambda2"], design["lambda3"],
+                                  1e-9)[1] for b in blows]
+
+    def pieces(edges):  # [(start, end)] between increasing (angle, window) edges
+        edges = sorted(edges)
+        return [(a + wa, b - wb) for (a, wa), (b, wb) in zip(edges[:-1], edges[1:])
+                if b - wb > a + wa]
+    stage1 = pieces([(n, window) for n in nodes]
+                    + [(b, max(window, w)) for b, w in zip(blows, at_blow)])
+    first = int(np.argmin(blows))
+    stage2 = pieces([(blows[first], at_blow[first]), (blows[1 - first], at_blow[1 - first]),
+                     (blows[first] + 4 * math.pi, at_blow[first])])
     best = {}
-    for a, b in zip(breaks[:-1], breaks[1:]):
-        if b - a <= 2 * window:
-            continue
-        for phi in np.linspace(a + window, b - window, int(3000 * (b - a) / (4 * math.pi))):
-            loads, _ = mech.loads(phi)
-            for joint in ("A", "B", "C", "D", "F", "G", "E"):
-                best[joint] = max(best.get(joint, 0.0), math.hypot(*loads[joint]))
-            best["M_b"] = max(best.get("M_b", 0.0), abs(loads["M_b"]))
+    for joints, spans in (("ABCD", stage1), ("FGE", stage2)):
+        for a, b in spans:
+            for phi in np.linspace(a, b, int(3000 * (b - a) / (4 * math.pi))):
+                loads, _ = mech.loads(phi)
+                for joint in joints:
+                    best[joint] = max(best.get(joint, 0.0), math.hypot(*loads[joint]))
+                if joints == "FGE":
+                    best["M_b"] = max(best.get("M_b", 0.0), abs(loads["M_b"]))
     for joint, value in best.items():
         name = "balancing_moment_peak" if joint == "M_b" else f"force_peak_{joint}"
         peak = float(ds[name].values)
         assert value * (1 - 1e-9) <= peak <= value * (1 + 1e-3), (joint, peak, value)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_single_four_bar_is_linkage_forces_of_stage_2_at_the_same_mean_blow(seed):
+    """[SIX]'s claim as numbers: the single impact four-bar is stage 2 alone (its crank
+    massless, links 4 and 5 as given, gravity turned by beta) driven at the crank speed of
+    the same mean energy per blow, sqrt of the mean of six_link's (u31 omega1)^2 at its two
+    blows; its peaks are linkage_forces' of that four-bar, and the ratios are the six-link's
+    peaks over them, to 1e-9."""
+    rng = np.random.default_rng(6465 + seed)
+    d = random_design(rng, constant_speed=True)
+    six = atlas(d)
+    kinematics = sweep.decode(sweep.run({
+        "mechanism": "six_link", "grid": {"direction": [d["direction"]]},
+        "fixed": {k: d[k] for k in ("lambda2", "lambda3", "mu4", "mu5", "beta", "delta",
+                                    "omega1", "crank_length")}})).isel(direction=0)
+    u = [float(kinematics[f"transfer_stage1_impact_{j}"]) for j in (1, 2)]
+    speed = d["omega1"] * math.sqrt((u[0] ** 2 + u[1] ** 2) / 2)
+    assert float(six.single_stage_omega1) == pytest.approx(speed, rel=1e-12)
+    l3 = d["lambda3"] * d["crank_length"]
+    single = sweep.decode(sweep.run({
+        "mechanism": "linkage_forces", "grid": {"tilt": [d["tilt"] + d["beta"]]},
+        "fixed": dict(l0=(1 - d["mu4"] + d["mu5"]) * l3, l1=l3, l2=d["mu4"] * l3,
+                      l3=d["mu5"] * l3, m1=0.0, J1=0.0, q1=0.0, m2=d["m4"], s2=d["s4"],
+                      q2=d["q4"], J2=d["J4"], m3=d["m5"], s3=d["s5"], q3=d["q5"],
+                      J3=d["J5"], omega1=d["direction"] * speed, epsilon1=0.0),
+        "method": {"peak_samples": 360}})).isel(tilt=0)
+    for ratio, six_peak, its in (("force_ratio_F", "force_peak_F", "force_peak_B"),
+                                 ("force_ratio_G", "force_peak_G", "force_peak_C"),
+                                 ("force_ratio_E", "force_peak_E", "force_peak_D"),
+                                 ("drive_torque_ratio", "balancing_moment_peak",
+                                  "balancing_moment_peak")):
+        assert float(six[ratio]) == pytest.approx(
+            float(six[six_peak]) / float(single[its]), rel=1e-9), ratio
+    largest = max(float(single[f"force_peak_{j}"]) for j in "ABCD")
+    six_largest = max(float(six[f"force_peak_{j}"]) for j in "ABCDFGE")
+    assert float(six.force_ratio_max) == pytest.approx(six_largest / largest, rel=1e-9)
