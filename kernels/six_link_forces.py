@@ -302,13 +302,12 @@ def cycle_breaks(impacts):
     return breaks
 
 
-@njit(**INNER_OPTIONS)
-def forces_point(pr, settings, out, prof):
-    """One six-link's loads: outputs into out, profiles into prof, its status."""
+@njit(**KERNEL_OPTIONS)
+def stages_of(pr, settings):
+    """The design's two stages (Stages, its four-bar vectors filled) and its blows: their
+    crank angles, raw, and link 3's ratio u31 at each."""
     tol = settings.geometry_tol
     lam2, lam3, mu4, mu5 = pr[P.lambda2], pr[P.lambda3], pr[P.mu4], pr[P.mu5]
-    if not sl.assemblable(lam2, lam3, mu4, mu5, tol):
-        return S.not_assemblable
     lam6, mu6 = 1.0 - lam2 + lam3, 1.0 - mu4 + mu5
     direction = pr[P.direction]
     w1, e1 = direction * pr[P.omega1], pr[P.epsilon1]
@@ -330,7 +329,6 @@ def forces_point(pr, settings, out, prof):
                 (-g * math.sin(tilt + beta), -g * math.cos(tilt + beta)), pr1, pr2,
                 settings.res1, settings.res2)
     impacts = sl.impact_angles(lam6, lam2, lam3, delta - beta, tol)
-    # link 3's ratio at each blow: the single four-bar's speed for the same mean blow
     blow_u31 = np.empty(2)
     for j in range(2):
         m = round(impacts[j] / TWO_PI)
@@ -338,11 +336,13 @@ def forces_point(pr, settings, out, prof):
         if math.isnan(u31) or abs(impacts[j] - TWO_PI * m) < 1e-12:  # on stage 1's node
             u31 = sl.stage1_node_value(m, lam6, math.sqrt(lam6 * lam2 / lam3))
         blow_u31[j] = u31
-        impacts[j] = impacts[j] % (2.0 * TWO_PI)
-    breaks = cycle_breaks(impacts)
+    return st, impacts, blow_u31
 
-    # cycle work and RMS of M_b: Gauss-Legendre on each open piece (M_b jumps at an impact)
-    gl_x, gl_w = settings.gl_x, settings.gl_w
+
+@njit(**KERNEL_OPTIONS)
+def cycle_integrals(st, breaks, gl_x, gl_w):
+    """(cycle work, RMS) of M_b over the 4 pi cycle: Gauss-Legendre on each open piece (M_b
+    jumps at a blow); NaN where a loop cannot close."""
     work = 0.0
     square = 0.0
     for piece in range(breaks.shape[0] - 1):
@@ -352,39 +352,36 @@ def forces_point(pr, settings, out, prof):
             continue
         for k in range(gl_x.shape[0]):
             if not solve(a + half * (gl_x[k] + 1.0), st):
-                return S.not_assemblable
+                return math.nan, math.nan
             mb = st.res1[ks.R_MB]
             work += half * gl_w[k] * mb
             square += half * gl_w[k] * mb * mb
-    out[O.balancing_moment_rms] = math.sqrt(square / (2.0 * TWO_PI))
-    out[O.cycle_work] = direction * work
+    return work, math.sqrt(square / (2.0 * TWO_PI))
 
-    # peaks outside the windows: stage 1's joints at every break (their dyad is singular at
-    # stage 1's nodes, and they carry stage 2's load at the blows), stage 2's joints and M_b
-    # at the blows only (link 3 passes stage 1's nodes smoothly)
-    # A blow's window is special_window in link 3's angle (phi3), as the single four-bar's
-    # in its crank's: both stage 2s are then as near their singular dyad at its edges.
-    window, n_peak = settings.window, settings.n_peak
+
+@njit(**KERNEL_OPTIONS)
+def cycle_peak_values(st, impacts, blow_u31, breaks, window, n_peak, best):
+    """The eight peaks into best, each outside its windows: stage 1's joints at every break
+    (their dyad is singular at stage 1's nodes, and they carry stage 2's load at the blows),
+    stage 2's joints and M_b at the blows only (link 3 passes stage 1's nodes smoothly). A
+    blow's window is ``window`` in link 3's angle (phi3), as the single four-bar's in its
+    crank's: both stage 2s are then as near their singular dyad at its edges."""
     first = 0 if impacts[0] <= impacts[1] else 1
     blows = np.array([impacts[first], impacts[1 - first], impacts[first] + 2.0 * TWO_PI])
     at_blows = np.array([window / blow_u31[first], window / blow_u31[1 - first],
                          window / blow_u31[first]])
-    windows = np.empty(breaks.shape[0])
+    windows = np.full(breaks.shape[0], window)
     for k in range(breaks.shape[0]):
-        windows[k] = window
         for j in range(2):
             if breaks[k] == impacts[j]:
                 windows[k] = max(window, at_blows[0 if j == first else 1])
-    best = np.full(N_PEAKS, -math.inf)
-    if not windowed_peaks(st, breaks, windows, n_peak, STAGE1_PEAKS, best):
-        return S.not_assemblable
-    if not windowed_peaks(st, blows, at_blows, n_peak, BLOW_PEAKS, best):
-        return S.not_assemblable
-    for q in range(N_PEAKS):
-        out[PEAK_ROWS[q]] = best[q]
+    return (windowed_peaks(st, breaks, windows, n_peak, STAGE1_PEAKS, best)
+            and windowed_peaks(st, blows, at_blows, n_peak, BLOW_PEAKS, best))
 
-    # profiles: the rigid-model values at every sampled angle (NaN exactly at a break)
-    angles = settings.angles
+
+@njit(**KERNEL_OPTIONS)
+def cycle_profiles(st, breaks, angles, prof):
+    """The rigid-model reactions and M_b at every angle into prof (NaN exactly at a break)."""
     for j in range(angles.shape[0]):
         phi = angles[j]
         at_break = False
@@ -402,17 +399,50 @@ def forces_point(pr, settings, out, prof):
         prof[F.F56_n, j], prof[F.F56_t, j] = res2[ks.R_F34N], res2[ks.R_F34T]
         prof[F.balancing_moment, j] = res1[ks.R_MB]
 
-    # [SIX]'s claim: stage 2 alone, driven directly at the speed that gives the same mean
-    # energy per blow, with the same links 4 and 5 (its crank massless, as link 3's arm)
-    w_single = w1 * math.sqrt(0.5 * np.sum(blow_u31 ** 2))
-    single = np.full(ks.N_PEAKS, -math.inf)
-    pr2[FB.omega1], pr2[FB.epsilon1] = w_single, 0.0
+
+@njit(**KERNEL_OPTIONS)
+def single_four_bar(st, speed, window, n_peak, single):
+    """[SIX]'s claim: the peaks (kernels.kinetostatics' PEAK_*) of stage 2 alone, its crank
+    driven directly at ``speed``, with the same links 4 and 5 (its crank massless, as link
+    3's arm), into single. Uses st.pr2 and st.res2 (the six-link's are done with)."""
+    pr2 = st.pr2
+    pr2[FB.omega1], pr2[FB.epsilon1] = speed, 0.0
     g2x, g2y = st.gravity2
-    if not ks.cycle_peaks(pr2, (st.sigma2, 0.0, 1, PATH_IMPACT), st.res2, tol,
-                          (g2x, g2y, 0.0, 0.0), int(CHANGE_POINT_B), 1, window, n_peak // 2,
-                          1, single):
+    return ks.cycle_peaks(pr2, (st.sigma2, 0.0, 1, PATH_IMPACT), st.res2, st.tol,
+                          (g2x, g2y, 0.0, 0.0), int(CHANGE_POINT_B), 1, window, n_peak, 1,
+                          single)
+
+
+@njit(**INNER_OPTIONS)
+def forces_point(pr, settings, out, prof):
+    """One six-link's loads: outputs into out, profiles into prof, its status."""
+    if not sl.assemblable(pr[P.lambda2], pr[P.lambda3], pr[P.mu4], pr[P.mu5],
+                          settings.geometry_tol):
         return S.not_assemblable
-    out[O.single_stage_omega1] = abs(w_single)
+    st, impacts, blow_u31 = stages_of(pr, settings)
+    for j in range(2):
+        impacts[j] = impacts[j] % (2.0 * TWO_PI)
+    breaks = cycle_breaks(impacts)
+    work, rms = cycle_integrals(st, breaks, settings.gl_x, settings.gl_w)
+    if math.isnan(work):
+        return S.not_assemblable
+    out[O.balancing_moment_rms] = rms
+    out[O.cycle_work] = pr[P.direction] * work
+
+    window, n_peak = settings.window, settings.n_peak
+    best = np.full(N_PEAKS, -math.inf)
+    if not cycle_peak_values(st, impacts, blow_u31, breaks, window, n_peak, best):
+        return S.not_assemblable
+    for q in range(N_PEAKS):
+        out[PEAK_ROWS[q]] = best[q]
+    cycle_profiles(st, breaks, settings.angles, prof)
+
+    # the single four-bar at the speed of the same mean energy per blow
+    speed = st.omega1 * math.sqrt(0.5 * np.sum(blow_u31 ** 2))
+    single = np.full(ks.N_PEAKS, -math.inf)
+    if not single_four_bar(st, speed, window, n_peak // 2, single):
+        return S.not_assemblable
+    out[O.single_stage_omega1] = abs(speed)
     out[O.force_ratio_F] = out[O.force_peak_F] / single[ks.PEAK_B]
     out[O.force_ratio_G] = out[O.force_peak_G] / single[ks.PEAK_C]
     out[O.force_ratio_E] = out[O.force_peak_E] / single[ks.PEAK_D]
