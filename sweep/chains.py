@@ -326,16 +326,17 @@ def _names_in(expression: str) -> set[str]:
 
 def _with_fixed(ds):
     """The source with its recorded fixed parameters as scalar variables, so that a
-    mapping may name a parameter the source held fixed (an atlas made before it echoed
-    crank_length as an output)."""
+    mapping or a condition may name a parameter the source held fixed (an atlas made before
+    it echoed crank_length as an output; ``type == "b"`` of an atlas of type b alone)."""
     try:
         fixed = json.loads(ds.attrs.get("spec", "{}")).get("fixed", {})
     except ValueError:
         fixed = {}
-    extra = {name: value for name, value in fixed.items()
-             if name not in ds.variables and isinstance(value, (int, float))
+    extra = {name: (value if isinstance(value, str) else float(value))
+             for name, value in fixed.items()
+             if name not in ds.variables and isinstance(value, (int, float, str))
              and not isinstance(value, bool)}
-    return ds.assign({name: float(value) for name, value in extra.items()}) if extra else ds
+    return ds.assign(extra) if extra else ds
 
 
 def _checked(function, ds, expression: str, key: str):

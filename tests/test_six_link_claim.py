@@ -72,3 +72,23 @@ def test_six_links_become_the_single_four_bar_of_their_mean_blow(tmp_path):
                                rtol=1e-12)
     np.testing.assert_allclose(single.restitution_kinematic.values,
                                six.restitution_kinematic.values, rtol=1e-12)
+
+
+def test_a_source_of_one_type_held_fixed_meets_the_chains_condition_by_it(tmp_path):
+    """A chain's condition (type == "b") reads a parameter the source held fixed: a type b
+    atlas chains, a type a atlas is refused in one line before any compute."""
+    for kind, chains in (("b", True), ("a", False)):
+        source = tmp_path / f"cr_{kind}.nc"
+        sweep.run({"mechanism": "crank_rocker",
+                   "grid": {"R": [0.1, 0.3], "largest_link": [12.0, 16.0]},
+                   "fixed": {"type": kind}}, source).close()
+        chained = {"mechanism": "six_link", "grid": {"from": {"atlas": str(source)}}}
+        if chains:
+            assert spec.validate(chained).shape[0] >= 2
+        else:
+            try:
+                spec.validate(chained)
+            except sweep.UserError as err:
+                assert "type" in str(err) and "\n" not in str(err)
+            else:
+                raise AssertionError("a type a source chained to six_link")
