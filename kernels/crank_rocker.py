@@ -361,6 +361,11 @@ def linkage_point(kind_code, r, big, lam0_in, lam2_in, lam3_in, root, l1, w, sig
     ``envelope`` (not NaN): the largest link's length, from which l1 follows;
     ``speed_limit`` (not NaN): the impact speed from which omega1 > 0 follows; ``window``:
     the half-width around the node left out of the working transmission angle.
+
+    One pass with early exits, in the four numbered steps below: each step may end the pass
+    with a status, and the twenty values the steps share go out in one record; split into
+    functions, each step would be a compile unit of its own in a first run
+    (benchmarks/compile_events.py counts them).
     """
     nan = math.nan
     lam0 = lam2 = lam3 = gamma = rk = before = after = ratio = speed = nan

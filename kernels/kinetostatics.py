@@ -317,6 +317,10 @@ def dyad_reactions(phi1, pr, sigma, res, snap, gx, gy, wb, eb):
     (gx, gy, wb, eb): gravity in the base frame and the base's angular velocity and
     acceleration at this crank angle (base_state), computed once per point where they do
     not change over the cycle.
+
+    One function, read top to bottom as the steps of docs/models.md §4.2 (kinematics, loads,
+    tangential parts, normal parts, the crank, virtual work): they share some forty local
+    scalars, which a split would pass through records on every call of the hot loop.
     """
     l0, l1, l2, l3 = pr[P.l0], pr[P.l1], pr[P.l2], pr[P.l3]
     m1, m2, m3 = pr[P.m1], pr[P.m2], pr[P.m3]
@@ -498,6 +502,27 @@ def cycle_peaks(pr, branch, res, tol, base, kind, count, window, n_peak, turns, 
     return True
 
 
+@njit(**KERNEL_OPTIONS)
+def cycle_profiles(pr, branch, res, tol, base, kind, count, start, angles, prof):
+    """The rigid-model reactions and M_b at every angle into prof[profile, angle] (NaN only
+    exactly at a node: ``count`` of them a turn from ``start``, where the dyad is
+    singular)."""
+    for j in range(angles.shape[0]):
+        phi = angles[j]
+        at_node = False
+        if kind != 0:  # nodes every 2 pi / count from start
+            spacing = 2.0 * math.pi / (2 if count > 1 else 1)
+            offset = (phi - start) % spacing
+            at_node = min(offset, spacing - offset) < 1e-12
+        if at_node or not _forces_at(phi, pr, branch, res, tol, base):
+            continue
+        prof[F.F21_n, j], prof[F.F21_t, j] = res[R_F21N], res[R_F21T]
+        prof[F.F34_n, j], prof[F.F34_t, j] = res[R_F34N], res[R_F34T]
+        prof[F.F32_n, j], prof[F.F32_t, j] = res[R_F32N], res[R_F32T]
+        prof[F.F14_n, j], prof[F.F14_t, j] = res[R_F14N], res[R_F14T]
+        prof[F.balancing_moment, j] = res[R_MB]
+
+
 @njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): status, the scalar outputs (out) and the
@@ -564,22 +589,7 @@ def design(i, pr, settings, out, prof):
     for q in range(N_PEAKS):
         out[PEAK_ROWS[q]] = best[q]
 
-    # profiles: the rigid-model values at every sampled angle (NaN only exactly at a node)
-    for j in range(prof_angles.shape[0]):
-        phi = prof_angles[j]
-        at_node = False
-        if kind != 0:  # nodes every 2 pi / count from start
-            spacing = 2.0 * math.pi / (2 if count > 1 else 1)
-            offset = (phi - start) % spacing
-            at_node = min(offset, spacing - offset) < 1e-12
-        if at_node or not _forces_at(phi, pr, branch, res, tol, base):
-            continue
-        prof[F.F21_n, j], prof[F.F21_t, j] = res[R_F21N], res[R_F21T]
-        prof[F.F34_n, j], prof[F.F34_t, j] = res[R_F34N], res[R_F34T]
-        prof[F.F32_n, j], prof[F.F32_t, j] = res[R_F32N], res[R_F32T]
-        prof[F.F14_n, j], prof[F.F14_t, j] = res[R_F14N], res[R_F14T]
-        prof[F.balancing_moment, j] = res[R_MB]
-
+    cycle_profiles(pr, branch, res, tol, base, kind, count, start, prof_angles, prof)
     for k in CHECKED_ROWS:
         if not math.isfinite(out[k]):
             return S.nonfinite

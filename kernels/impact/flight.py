@@ -82,6 +82,8 @@ def make_flight(system):
     track_peak, final_peak = make_peak(monitor, step, METHOD_DOP853 in system.methods)
     start_step, next_step, events_at, coast_on = make_step_control(system)
 
+    # one loop, the adaptive step and its events, amplitude, peak and coast: its state is
+    # a dozen scalars carried from step to step, which numba keeps in registers
     @njit(**INNER_OPTIONS)
     def flight(t0, y0, p, data, settings, refine):
         method, rtol, atol = settings.method, settings.rtol, settings.atol
