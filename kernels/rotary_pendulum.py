@@ -12,19 +12,23 @@ import math
 
 import numpy as np
 
-from kernels.declaration import POSITIVE, Boundary, Mechanism, Output, Quantity
+from kernels.declaration import POSITIVE, Boundary, Mechanism, Output, Quantity, profile_points
+from kernels.extrema import cell_midpoints
 from kernels.impact.outcomes import (SEQUENCE_CYCLE, SEQUENCE_DEGENERATE, SEQUENCE_ESCAPE,
                                      SEQUENCE_MAX_STEPS, SEQUENCE_NO_IMPACT,
                                      SEQUENCE_NONFINITE, SEQUENCE_NOT_PERIODIC,
                                      SEQUENCE_SEPARATRIX, SEQUENCE_UNDERFLOW)
 from kernels.pendulum import dispatch
-from kernels.pendulum.cases import CASE_COLUMNS, ROW
+from kernels.pendulum.cases import CASE_COLUMNS, ROW, C
 from kernels.pendulum.dispatch import (ATTRACTOR_OUTPUTS, INTEGRATOR_AUTO, INTEGRATOR_CLOSED,
                                        INTEGRATOR_DOP853, INTEGRATOR_DOPRI5, INTEGRATOR_RK4,
                                        USED_CLOSED, USED_DOP853, USED_DOPRI5, USED_RK4)
 from kernels.pendulum.distinct import distinct_rows
-from kernels.pendulum.models import MODEL_ROTOR
-from kernels.pendulum.table import MODELS, SYSTEMS, TOOL_LAB_WINDOW, TOOLS, with_closed_form
+from kernels.pendulum.free_flight import steady_state_speed
+from kernels.pendulum.histories import ACCELERATION, RATE, SWING, steady_histories
+from kernels.pendulum.models import MODEL_PAPER, MODEL_ROTOR
+from kernels.pendulum.table import (MODELS, SYSTEMS, TOOL_LAB_WINDOW, TOOL_ROTOR_STOP, TOOLS,
+                                   with_closed_form)
 
 #: meanings of the codes of the ``regime`` output (CF flag_meanings, in this order)
 REGIMES = ("period_1", "period_n", "quasi_periodic", "escape", "chatter", "no_impact",
@@ -73,6 +77,9 @@ LABELS = {
     "impact_speed_min_ratio": "slowest/fastest impact", "edge_margin": "edge margin",
     "attractor_count": "attractors", "basin_fraction": "basin fraction",
     "error_estimate": "error estimate", "blow_energy": "blow energy $E$", "blow_rate": "blow rate",
+    "time": "time $t$", "rotor_angle": r"rotor angle $\varphi_1$",
+    "swing_angle": r"swing $\psi$", "swing_rate": r"swing rate $\psi'$",
+    "swing_acceleration": r"swing acceleration $\psi''$", "cycle_phase": "cycle phase $s$",
 }
 
 
@@ -215,6 +222,19 @@ DECLARATION = Mechanism(
         Output("blow_rate", "min-1", "blows per minute in steady state: 60 times the mean "
                "rotor speed over the rotor angle between impacts", on_request=True),
     ),
+    profiles=(
+        Output("time", "s", "time since the impact that opens the steady cycle", "t"),
+        Output("rotor_angle", "rad", "rotor angle turned since that impact (omega1 t)", "φ1"),
+        Output("swing_angle", "rad", "relative angle of the pendulum (psi), 0 at the stop",
+               "ψ"),
+        Output("swing_rate", "rad s-1", "relative angular velocity of the pendulum (psi')",
+               "ψ′"),
+        Output("swing_acceleration", "rad s-2", "relative angular acceleration of the "
+               "pendulum (psi'')", "ψ″"),
+    ),
+    profile_dim=Quantity("cycle_phase", "1", "phase of the steady cycle: 0 at an impact, 1 "
+                         "at the next", "s"),
+    profile_coordinate=lambda method: cell_midpoints(method.profile_points, 1.0),
     status=("ok", "escape", "no_impact", "not_periodic", "separatrix", "max_steps",
             "step_underflow", "degenerate", "nonfinite"),
     method=(
@@ -241,6 +261,9 @@ DECLARATION = Mechanism(
         Quantity("tol", "1", "auto, and closed_form on the blade: relative accuracy "
                  "requested of the outputs", default=1e-8, minimum=1e-11, maximum=1e-2,
                  used_when={"integrator": ("auto", "closed_form")}),
+        profile_points("phases of the steady cycle's time histories ([RP] Fig. 3; 0: "
+                       "none): the paper and rigid models on the rotor stop in a period-1 "
+                       "cycle (NaN elsewhere)"),
         Quantity("starts", "1", "starting states per design for attractor_count and "
                  "basin_fraction (1: from rest only; each start costs a steady state)",
                  default=1, minimum=1, maximum=1000, integer=True),
@@ -282,7 +305,8 @@ def run(params, method):
                      for name in CASE_COLUMNS], axis=1)
     cases, index = distinct_rows(keys)
     asked = set(method.outputs)
-    d = dispatch.solve_cases(cases, method)[index].T
+    rows = dispatch.solve_cases(cases, method)
+    d = rows[index].T
     outcome = d[ROW.outcome].astype(np.int64)
     status = _STATUS_OF[outcome]
     cycle = outcome == SEQUENCE_CYCLE
@@ -331,4 +355,40 @@ def run(params, method):
     broken = cycle & ~np.all(np.isfinite(values), axis=0)
     status[broken] = S.nonfinite
     out[O.regime, broken] = np.nan  # nor is its regime known
-    return out, status, np.empty((0, params.shape[1], 0))
+    return out, status, histories(cases, rows, index, status, w, method)
+
+
+#: the profiles' rows
+H = DECLARATION.profile_index
+
+
+def histories(cases, rows, index, status, w, method):
+    """The steady cycle's time histories (profiles[5, n, phases]) where they are asked for
+    and exist: a period-1 cycle of a constant-speed model on the rotor stop, its flight from
+    the closed form's v* over the impact interval (kernels/pendulum/histories.py), solved
+    once per case and rescaled by omega1. NaN elsewhere."""
+    phases = DECLARATION.profile_coordinate(method)
+    prof = np.full((len(DECLARATION.profiles), index.shape[0], phases.shape[0]), np.nan)
+    if phases.shape[0] == 0:
+        return prof
+    model, k, r = cases[:, C.model], cases[:, C.k], cases[:, C.R]
+    simple = ((model != MODEL_ROTOR) & (cases[:, C.tool] == TOOL_ROTOR_STOP)
+              & (rows[:, ROW.outcome] == SEQUENCE_CYCLE) & (rows[:, ROW.period] == 1)
+              & (rows[:, ROW.chatter] == 0))
+    launches = np.array([steady_state_speed(a, b) if ok else np.nan
+                         for a, b, ok in zip(k, r, simple)])
+    intervals = np.where(simple, rows[:, ROW.interval], np.nan)
+    second = np.where(model == MODEL_PAPER, cases[:, C.xi], cases[:, C.kappa])
+    each = np.empty((cases.shape[0], 3, phases.shape[0]))
+    steady_histories(model.astype(np.int64), np.ascontiguousarray(np.stack([k, second], 1)),
+                     launches, intervals, phases, each)
+    usable = (status == S.ok)[:, None]
+    scale = np.abs(w)[:, None]
+    per_point = each[index]
+    for row, values in ((H.swing_angle, per_point[:, SWING]),
+                        (H.swing_rate, per_point[:, RATE] * scale),
+                        (H.swing_acceleration, per_point[:, ACCELERATION] * scale ** 2),
+                        (H.rotor_angle, phases[None, :] * intervals[index][:, None]),
+                        (H.time, phases[None, :] * intervals[index][:, None] / scale)):
+        prof[row] = np.where(usable & np.isfinite(per_point[:, SWING]), values, np.nan)
+    return prof

@@ -692,8 +692,10 @@ def profile_figure(ds: xr.Dataset, names: list[str], where: str | None = None,
     fig = Figure(figsize=(8, 2.0 + 2.6 * len(by_unit)), layout="constrained")
     axes = fig.subplots(len(by_unit), 1, sharex=True, squeeze=False)[:, 0]
     xname = against or pdim
-    for ax, (units, group) in zip(axes, by_unit.items()):
-        _profile_panel(ax, ds, points, group, units, xname, degrees, varying)
+    for n, (ax, (units, group)) in enumerate(zip(axes, by_unit.items())):
+        # one legend of the designs, unless a panel's variables need their own
+        legend = n == 0 or len(group) > 1
+        _profile_panel(ax, ds, points, group, units, xname, degrees, varying, legend)
         if point[xname].attrs.get("units") == "rad" and against is None:
             _angle_ticks(ax, degrees)
             if len(points) == 1:  # each design has its own events
@@ -740,7 +742,7 @@ MAX_CURVES = 12
 
 
 def _profile_panel(ax, ds: xr.Dataset, points: list, group: list[str], units: str,
-                   xname: str, degrees: bool, varying: list[str]) -> None:
+                   xname: str, degrees: bool, varying: list[str], legend: bool) -> None:
     """One unit's curves: each variable at each point (colour by curve), the y axis
     labelled, symmetric-log where a spike would flatten the rest, a legend for several."""
     curves = [(name, p) for p in points for name in group]
@@ -764,7 +766,7 @@ def _profile_panel(ax, ds: xr.Dataset, points: list, group: list[str], units: st
         name += ", symlog"
     ax.set_ylabel(labels.wrapped(name, 34))
     ax.grid(True, which="both", alpha=0.3)
-    if len(curves) > 1:  # beside the panel, or under it where the names are long
+    if legend and len(curves) > 1:  # beside the panel, or under it where names are long
         handles, texts = ax.get_legend_handles_labels()
         if max(len(t) for t in texts) > 30:
             ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12),

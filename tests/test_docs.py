@@ -137,5 +137,6 @@ def test_the_walk_throughs_run_in_sequence_in_one_folder(tmp_path):
                  "breaker_pick_sheet.html", "breaker_explorer.html", "rock_band_robust.png",
                  "rock_band_front.nc", "breaker_tolerance.png", "breaker_sensitivity.png",
                  "paper_cr_fig2.png", "paper_guim.png", "paper_six_fig4.png",
-                 "paper_six_fig6.png", "six_claim.png", "six_link_forces_profile.png"):
+                 "paper_six_fig6.png", "six_claim.png", "six_link_forces_profile.png",
+                 "paper_rp_fig3.png"):
         assert (tmp_path / name).is_file(), name
