@@ -380,8 +380,8 @@ def histories(cases, rows, index, status, w, method):
     intervals = np.where(simple, rows[:, ROW.interval], np.nan)
     second = np.where(model == MODEL_PAPER, cases[:, C.xi], cases[:, C.kappa])
     each = np.empty((cases.shape[0], 3, phases.shape[0]))
-    steady_histories(model.astype(np.int64), np.ascontiguousarray(np.stack([k, second], 1)),
-                     launches, intervals, phases, each)
+    steady_histories(model.astype(np.int64), np.ascontiguousarray(k),
+                     np.ascontiguousarray(second), launches, intervals, phases, each)
     usable = (status == S.ok)[:, None]
     scale = np.abs(w)[:, None]
     per_point = each[index]

@@ -50,15 +50,16 @@ _rigid_walk = _make_walk(rigid_rhs)
 
 
 @njit(**KERNEL_OPTIONS)
-def steady_histories(models, params, launches, intervals, phases, out):
-    """For each case c (model code, its (k, xi) or (k, kappa), launch speed v* and impact
-    interval tau1, NaN where it has no such cycle): its history at ``phases`` (fractions of
-    tau1, increasing) into out[c, row, phase], in omega1 units; NaN where none."""
+def steady_histories(models, ks, seconds, launches, intervals, phases, out):
+    """For each case c (model code, k, its xi (paper) or kappa (rigid), launch speed v* and
+    impact interval tau1, NaN where it has no such cycle): its history at ``phases``
+    (fractions of tau1, increasing) into out[c, row, phase], in omega1 units; NaN where
+    none."""
     for c in range(models.shape[0]):
         if not (math.isfinite(launches[c]) and math.isfinite(intervals[c])):
             out[c, :, :] = math.nan
             continue
-        p = (params[c, 0], params[c, 1])
+        p = (ks[c], seconds[c])
         if models[c] == MODEL_PAPER:
             _paper_walk(p, launches[c], intervals[c], phases, out[c])
         else:
