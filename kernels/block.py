@@ -13,6 +13,7 @@ compile unit of their own either (benchmarks/compile_events.py).
 """
 
 import numba
+import numpy as np
 
 #: the loop: for each design (column) i of ``params`` (n_parameters, n),
 #: ``status[i] = point(i, pr, settings, out_i, prof_i)`` with pr the design's parameters
@@ -51,3 +52,10 @@ def design_block(point, name: str, namespace: dict, options: dict):
                  "exec"), namespace)
     namespace[name] = numba.njit(**options)(namespace[name])
     return namespace[name]
+
+
+def block_arrays(declaration, n: int, angles):
+    """A block's result arrays for the loop: outputs (n_outputs, n), status (n,) and
+    profiles (n_profiles, n, angles), to be filled by name."""
+    return (np.empty((len(declaration.outputs), n)), np.empty(n, dtype=np.int8),
+            np.empty((len(declaration.profiles), n, len(angles))))

@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 
 from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
-from kernels.block import design_block
+from kernels.block import block_arrays, design_block
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Boundary, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol, path,
                                  profile_points)
@@ -555,10 +555,8 @@ def run(params, method):
     """Entry point: (outputs, status, profiles[2, n, n_angles]). The energy per blow and the
     blow rate only where asked for."""
     n = params.shape[1]
-    out = np.empty((len(O), n))
-    status = np.empty(n, dtype=np.int8)
     angles = DECLARATION.profile_coordinate(method)
-    prof = np.empty((len(DECLARATION.profiles), n, angles.shape[0]))
+    out, status, prof = block_arrays(DECLARATION, n, angles)
     crank_rocker_block(np.ascontiguousarray(params),
                        Settings(geometry_tol=float(method.geometry_tol),
                                 working_window=float(method.working_window), angles=angles,

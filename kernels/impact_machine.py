@@ -22,7 +22,7 @@ from numba import njit
 
 from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels import kinetostatics as ks
-from kernels.block import design_block
+from kernels.block import block_arrays, design_block
 from kernels.crank_rocker import S as LINKAGE
 from kernels.crank_rocker import TYPE_GENERAL, linkage_point
 from kernels.extrema import cell_midpoints
@@ -337,9 +337,7 @@ def run(params, method):
     """Entry point: (outputs, status, profiles[n_profiles, n, n_angles])."""
     n = params.shape[1]
     angles = cell_midpoints(method.profile_points, 2.0 * np.pi)
-    out = np.empty((len(O), n))
-    status = np.empty(n, dtype=np.int8)
-    prof = np.empty((len(F), n, angles.shape[0]))
+    out, status, prof = block_arrays(DECLARATION, n, angles)
     settings = Settings(
         geometry_tol=float(method.geometry_tol), tol=float(method.tol),
         max_revolutions=int(method.max_revolutions), start_mode=int(method.start),

@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
-from kernels.block import design_block
+from kernels.block import block_arrays, design_block
 from kernels.crank_rocker import impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol, path,
@@ -615,9 +615,7 @@ def run(params, method):
     gl_x, gl_w = np.polynomial.legendre.leggauss(method.quadrature_points)
     angles = DECLARATION.profile_coordinate(method)
     n = params.shape[1]
-    out = np.empty((len(O), n))
-    status = np.empty(n, dtype=np.int8)
-    prof = np.empty((len(F), n, angles.shape[0]))
+    out, status, prof = block_arrays(DECLARATION, n, angles)
     settings = Settings(geometry_tol=float(method.geometry_tol),
                         window=float(method.special_window), gl_x=gl_x, gl_w=gl_w,
                         n_peak=int(method.peak_samples), angles=angles,

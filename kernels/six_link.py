@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
-from kernels.block import design_block
+from kernels.block import block_arrays, design_block
 from kernels.crank_rocker import branch_values, impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quantity,
                                  geometry_tol, peak_samples, profile_points)
@@ -397,9 +397,7 @@ def run(params, method):
     """Entry point: (outputs, status, profiles[1, n, n_angles])."""
     angles = cycle_angles(method)
     n = params.shape[1]
-    out = np.empty((len(O), n))
-    status = np.empty(n, dtype=np.int8)
-    prof = np.empty((len(DECLARATION.profiles), n, angles.shape[0]))
+    out, status, prof = block_arrays(DECLARATION, n, angles)
     six_link_block(np.ascontiguousarray(params),
                    Settings(geometry_tol=float(method.geometry_tol),
                             samples=int(method.samples), angles=angles,

@@ -30,7 +30,7 @@ from numba import njit
 from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels import kinetostatics as ks
 from kernels import six_link as sl
-from kernels.block import design_block
+from kernels.block import block_arrays, design_block
 from kernels.crank_rocker import impact_branch
 from kernels.declaration import (Mechanism, Output, Quantity, geometry_tol, peak_samples,
                                  profile_points)
@@ -481,9 +481,7 @@ def run(params, method):
     gl_x, gl_w = np.polynomial.legendre.leggauss(method.quadrature_points)
     angles = sl.cycle_angles(method)
     n = params.shape[1]
-    out = np.empty((len(O), n))
-    status = np.empty(n, dtype=np.int8)
-    prof = np.empty((len(F), n, angles.shape[0]))
+    out, status, prof = block_arrays(DECLARATION, n, angles)
     n_fb = len(ks.DECLARATION.parameters)
     settings = Settings(geometry_tol=float(method.geometry_tol),
                         window=float(method.special_window), gl_x=gl_x, gl_w=gl_w,
