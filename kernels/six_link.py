@@ -204,6 +204,17 @@ def link3_on_branch(phi1, lam6, lam2, lam3, sigma1, snap):
 
 
 @njit(**KERNEL_OPTIONS)
+def blow_transfer(phi1, lam6, lam2, lam3, gamma1, snap):
+    """Stage 1's u31 at a blow's crank angle phi1 (unreduced): on the smooth path, or its
+    closed-form value where the blow falls on stage 1's node (0/0 there)."""
+    u31 = stage1(phi1, lam6, lam2, lam3, snap)[1]
+    m = round(phi1 / TWO_PI)
+    if math.isnan(u31) or abs(phi1 - TWO_PI * m) < 1e-12:
+        u31 = stage1_node_value(m, lam6, gamma1)
+    return u31
+
+
+@njit(**KERNEL_OPTIONS)
 def stage1_node_value(m, lam6, gamma1):
     """u31 on the smooth path at the node phi1 = 2 pi m (closed form, docs/models.md §3.3)."""
     sigma_before = stage1_branch(TWO_PI * m - 1.0)
@@ -341,10 +352,7 @@ def six_link_point(lam2, lam3, mu4, mu5, beta, delta, direction, w, l1, tol, n_s
     for j in range(2):
         phi_i = impacts[j]
         impacts[j] = phi_i % (2.0 * TWO_PI)
-        u31 = stage1(phi_i, lam6, lam2, lam3, tol)[1]
-        m = round(phi_i / TWO_PI)
-        if math.isnan(u31) or abs(phi_i - TWO_PI * m) < 1e-12:
-            u31 = stage1_node_value(m, lam6, gamma1)  # the impact falls on stage 1's node
+        u31 = blow_transfer(phi_i, lam6, lam2, lam3, gamma1, tol)
         u51 = u31 * before53
         row_u51, row_u31, row_angle, row_speed = IMPACT_ROWS[j]
         out[row_u51] = u51

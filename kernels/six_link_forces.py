@@ -331,11 +331,8 @@ def stages_of(pr, settings):
     impacts = sl.impact_angles(lam6, lam2, lam3, delta - beta, tol)
     blow_u31 = np.empty(2)
     for j in range(2):
-        m = round(impacts[j] / TWO_PI)
-        u31 = sl.stage1(impacts[j], lam6, lam2, lam3, tol)[1]
-        if math.isnan(u31) or abs(impacts[j] - TWO_PI * m) < 1e-12:  # on stage 1's node
-            u31 = sl.stage1_node_value(m, lam6, math.sqrt(lam6 * lam2 / lam3))
-        blow_u31[j] = u31
+        blow_u31[j] = sl.blow_transfer(impacts[j], lam6, lam2, lam3,
+                                       math.sqrt(lam6 * lam2 / lam3), tol)
     return st, impacts, blow_u31
 
 

@@ -145,10 +145,9 @@ def test_just_outside_the_band_the_linkage_does_what_the_guide_derives(defect):
     from kernels.fourbar import vector_kinematics
 
     lam0, lam3 = 4.2, 2.3
-    gamma_of = lambda lam2: math.sqrt(lam0 * lam2 / lam3)  # noqa: E731
     x_e = math.sqrt(2.0 * (1.0 + lam0) * defect / lam0)
     lam2 = lam0 + 1.0 - lam3 + defect
-    gamma = gamma_of(lam2)
+    gamma = math.sqrt(lam0 * lam2 / lam3)
     low, high = (1.0 - gamma) / (1.0 + lam0), (1.0 + gamma) / (1.0 + lam0)
     for sigma in (1.0, -1.0):
         node = vector_kinematics(math.pi, lam0, 1.0, lam2, lam3, sigma)
