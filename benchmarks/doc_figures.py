@@ -66,6 +66,7 @@ def main(folder: Path) -> None:
     robust_figure(folder)
     page_figures(folder, "papers_figures.md")
     page_figures(folder, "six_link.md", "## Does the two-stage")
+    page_figures(folder, "rotary_pendulum.md", "## Loads: the hinge reaction")
 
 
 def explorer_screenshot(folder: Path, name: str = "explorer.png") -> None:

@@ -53,15 +53,20 @@ _HARMONIC = {"base_motion": ("harmonic",)}
 _MOVING = {"base_motion": ("rotating", "harmonic")}
 _WINDOWED = "outside |phi1 - phi1*| < special_window at a special position"
 
-def reaction_profiles(joints) -> tuple:
+def reaction_profiles(joints, magnitude: bool = False) -> tuple:
     """The profiles of joint reactions, each resolved along and across a link: for each
     (force, what acts on what, the link), its normal (along) and tangential (across)
-    components, ``F21_n`` and ``F21_t``."""
-    return tuple(Output(f"{force}_{c}", "N", f"{what} {side} the {link} ({force} {part})",
-                        f"{force}^{mark}")
-                 for force, what, link in joints
-                 for c, side, part, mark in (("n", "along", "normal", "n"),
-                                             ("t", "across", "tangential", "τ")))
+    components, ``F21_n`` and ``F21_t``; with ``magnitude``, then each one's magnitude,
+    ``F21``."""
+    resolved = tuple(Output(f"{force}_{c}", "N", f"{what} {side} the {link} ({force} {part})",
+                            f"{force}^{mark}")
+                     for force, what, link in joints
+                     for c, side, part, mark in (("n", "along", "normal", "n"),
+                                                 ("t", "across", "tangential", "τ")))
+    if not magnitude:
+        return resolved
+    return resolved + tuple(Output(force, "N", f"{what}, magnitude (|{force}|)", f"|{force}|")
+                            for force, what, link in joints)
 
 
 def _rules(given: dict) -> str | None:

@@ -25,7 +25,11 @@ from kernels.pendulum.dispatch import (ATTRACTOR_OUTPUTS, INTEGRATOR_AUTO, INTEG
                                        USED_CLOSED, USED_DOP853, USED_DOPRI5, USED_RK4)
 from kernels.pendulum.distinct import distinct_rows
 from kernels.pendulum.free_flight import steady_state_speed
-from kernels.pendulum.histories import ACCELERATION, RATE, SWING, steady_histories
+from kernels.pendulum.histories import (ACCELERATION, CYCLE_ANGLE, CYCLE_TIME, CYCLE_WORK,
+                                       DRIVE_TORQUE, HINGE_ACROSS, HINGE_ALONG, HINGE_IMPULSE,
+                                       IMPACT_LOSS, MEAN_TORQUE, N_HISTORY, N_LOADS,
+                                       PEAK_HINGE, PEAK_TORQUE, RATE, ROTOR_ANGLE, SWING, TIME,
+                                       driven_cycle, rotor_cycle, striker_geometry)
 from kernels.pendulum.models import MODEL_PAPER, MODEL_ROTOR
 from kernels.pendulum.table import (MODELS, SYSTEMS, TOOL_LAB_WINDOW, TOOL_ROTOR_STOP, TOOLS,
                                    with_closed_form)
@@ -40,8 +44,10 @@ _ROTOR = {"model": ("rotor",)}
 def _rules(given: dict) -> str | None:
     """The closed form exists for the constant-speed models on the rotor stop and for the
     rigid model's flights on the blade; the energy per blow needs the striker's mass."""
-    if "blow_energy" in given.get("outputs", ()) and "striker_mass" not in given:
-        return "striker_mass: required for the output blow_energy"
+    needing_mass = next((name for name in given.get("outputs", ())
+                         if name in ("blow_energy",) + LOAD_OUTPUTS), None)
+    if needing_mass and "striker_mass" not in given:
+        return f"striker_mass: required for the output {needing_mass}"
     models = given.get("model", {"paper"})
     tools = given.get("tool", {"rotor_stop"})
     if "closed_form" in given.get("method.integrator", ()) and not with_closed_form(models,
@@ -80,7 +86,19 @@ LABELS = {
     "time": "time $t$", "rotor_angle": r"rotor angle $\varphi_1$",
     "swing_angle": r"swing $\psi$", "swing_rate": r"swing rate $\psi'$",
     "swing_acceleration": r"swing acceleration $\psi''$", "cycle_phase": "cycle phase $s$",
+    "hinge_force_peak": r"peak hinge force $|Q|_\max$", "hinge_impulse": "hinge impulse $S_Q$",
+    "drive_torque_peak": r"peak drive torque $|M_d|_\max$",
+    "drive_torque_mean": r"mean drive torque $\bar M_d$",
+    "drive_power_mean": r"mean drive power $\bar P_d$",
+    "energy_balance_error": "energy balance error",
+    "hinge_force_along": "hinge force along $Q_n$", "hinge_force_across": "hinge force across $Q_t$",
+    "hinge_force": "hinge force $|Q|$", "drive_torque": "drive torque $M_d$",
 }
+
+#: the outputs of the steady cycle's loads (kernels/pendulum/histories.py): they need the
+#: striker's mass
+LOAD_OUTPUTS = ("hinge_force_peak", "hinge_impulse", "drive_torque_peak", "drive_torque_mean",
+                "drive_power_mean", "energy_balance_error")
 
 
 DECLARATION = Mechanism(
@@ -121,8 +139,10 @@ DECLARATION = Mechanism(
                  **POSITIVE),
         Quantity("l2", "m", "pendulum length to the striker (l2)", "l2", default=0.04,
                  **POSITIVE),
-        Quantity("striker_mass", "kg", "the striker's mass reduced to its contact point, for "
-                 "the energy per blow", "m_s", **POSITIVE),
+        Quantity("striker_mass", "kg", "the striker's mass (a body with its centre at l2 "
+                 "where kappa is its default, at l2 xi/(kappa (1 + xi)) otherwise, and "
+                 "centroidal inertia from xi), for the energy per blow and the loads",
+                 "m_s", **POSITIVE),
         Quantity("tool", "1", "impact condition: a stop on the rotor at psi = 0 "
                  "(rotor_stop, the paper's), or a blade fixed in the frame hit by the "
                  "striker when it reaches it with |psi| <= tool_window (lab_window)",
@@ -221,6 +241,26 @@ DECLARATION = Mechanism(
                "speed squared, over 2", "E_blow", on_request=True),
         Output("blow_rate", "min-1", "blows per minute in steady state: 60 times the mean "
                "rotor speed over the rotor angle between impacts", on_request=True),
+        Output("hinge_force_peak", "N", "peak force of the pendulum's hinge on the rotor over "
+               "the steady cycle, the impact's impulse apart (a period-1 cycle on the rotor "
+               "stop; NaN elsewhere)", "|Q|max", on_request=True),
+        Output("hinge_impulse", "N s", "impulse through the hinge on the rotor at each "
+               "impact of the steady cycle: zero where the contact is at the centre of "
+               "percussion (kappa = 1), the paper's premise for a constant rotor speed",
+               "S_Q", on_request=True),
+        Output("drive_torque_peak", "N m", "peak |torque| of the rotor's drive over the "
+               "steady cycle: at constant rotor speed the torque that holds it (dH_O/dt of "
+               "the pendulum), its impulse at the impact apart; the rotor model's motor "
+               "torque", "|M_d|max", on_request=True),
+        Output("drive_torque_mean", "N m", "mean torque of the rotor's drive over the steady "
+               "cycle, the impact's angular impulse included", "M̄_d", on_request=True),
+        Output("drive_power_mean", "W", "mean power of the rotor's drive over the steady "
+               "cycle: its work per cycle over the cycle's time", "P̄_d", on_request=True),
+        Output("energy_balance_error", "1", "the drive's work per steady cycle (its "
+               "torque integrated along the cycle's history, with its angular impulse at "
+               "the impact at constant rotor speed) less the impact's loss "
+               "(1 - R^2) v_n^2/(2 J M^-1 J^T), over that loss: the history's own error",
+               diagnostic=True, on_request=True),
     ),
     profiles=(
         Output("time", "s", "time since the impact that opens the steady cycle", "t"),
@@ -231,6 +271,15 @@ DECLARATION = Mechanism(
                "ψ′"),
         Output("swing_acceleration", "rad s-2", "relative angular acceleration of the "
                "pendulum (psi'')", "ψ″"),
+        Output("hinge_force_along", "N", "force of the pendulum's hinge on the rotor along "
+               "the pendulum, positive outward from the hinge (needs striker_mass)", "Q_n"),
+        Output("hinge_force_across", "N", "force of the pendulum's hinge on the rotor across "
+               "the pendulum, positive towards increasing psi (needs striker_mass)", "Q_t"),
+        Output("hinge_force", "N", "magnitude of the hinge's force on the rotor (needs "
+               "striker_mass)", "|Q|"),
+        Output("drive_torque", "N m", "torque of the rotor's drive: at constant rotor speed "
+               "the torque that holds it, for the rotor model its motor's (needs "
+               "striker_mass)", "M_d"),
     ),
     profile_dim=Quantity("cycle_phase", "1", "phase of the steady cycle: 0 at an impact, 1 "
                          "at the next", "s"),
@@ -261,9 +310,9 @@ DECLARATION = Mechanism(
         Quantity("tol", "1", "auto, and closed_form on the blade: relative accuracy "
                  "requested of the outputs", default=1e-8, minimum=1e-11, maximum=1e-2,
                  used_when={"integrator": ("auto", "closed_form")}),
-        profile_points("phases of the steady cycle's time histories ([RP] Fig. 3; 0: "
-                       "none): the paper and rigid models on the rotor stop in a period-1 "
-                       "cycle (NaN elsewhere)"),
+        profile_points("phases of the steady cycle's time histories and loads ([RP] "
+                       "Fig. 3; 0: none): every model on the rotor stop in a period-1 cycle "
+                       "(NaN elsewhere)"),
         Quantity("starts", "1", "starting states per design for attractor_count and "
                  "basin_fraction (1: from rest only; each start costs a steady state)",
                  default=1, minimum=1, maximum=1000, integer=True),
@@ -355,40 +404,69 @@ def run(params, method):
     broken = cycle & ~np.all(np.isfinite(values), axis=0)
     status[broken] = S.nonfinite
     out[O.regime, broken] = np.nan  # nor is its regime known
-    return out, status, histories(cases, rows, index, status, w, method)
+    prof, loads = histories(cases, rows, index, status, p, method)
+    if set(asked) & set(LOAD_OUTPUTS):
+        out[O.hinge_force_peak] = loads[PEAK_HINGE]
+        out[O.hinge_impulse] = loads[HINGE_IMPULSE]
+        out[O.drive_torque_peak] = loads[PEAK_TORQUE]
+        out[O.drive_torque_mean] = loads[MEAN_TORQUE]
+        out[O.drive_power_mean] = loads[CYCLE_WORK] / loads[CYCLE_TIME]
+        out[O.energy_balance_error] = (loads[CYCLE_WORK] - loads[IMPACT_LOSS]) / loads[IMPACT_LOSS]
+    else:
+        out[[getattr(O, name) for name in LOAD_OUTPUTS]] = np.nan
+    return out, status, prof
 
 
 #: the profiles' rows
 H = DECLARATION.profile_index
 
 
-def histories(cases, rows, index, status, w, method):
-    """The steady cycle's time histories (profiles[5, n, phases]) where they are asked for
-    and exist: a period-1 cycle of a constant-speed model on the rotor stop, its flight from
-    the closed form's v* over the impact interval (kernels/pendulum/histories.py), solved
-    once per case and rescaled by omega1. NaN elsewhere."""
+def histories(cases, rows, index, status, p, method):
+    """The steady cycle's time histories (profiles[rows, n, phases]) and loads
+    (loads[histories.N_LOADS, n], SI) where they are asked for (profile points, a load
+    output) and exist: a period-1 cycle on the rotor stop, the constant-speed models' from
+    the closed form's v*, the rotor model's from its row's section state
+    (kernels/pendulum/histories.py), solved once per case in omega1, l2 and striker-mass
+    units and rescaled. NaN elsewhere, and the forces without striker_mass."""
     phases = DECLARATION.profile_coordinate(method)
     prof = np.full((len(DECLARATION.profiles), index.shape[0], phases.shape[0]), np.nan)
-    if phases.shape[0] == 0:
-        return prof
-    model, k, r = cases[:, C.model], cases[:, C.k], cases[:, C.R]
-    simple = ((model != MODEL_ROTOR) & (cases[:, C.tool] == TOOL_ROTOR_STOP)
-              & (rows[:, ROW.outcome] == SEQUENCE_CYCLE) & (rows[:, ROW.period] == 1)
-              & (rows[:, ROW.chatter] == 0))
-    launches = np.array([steady_state_speed(a, b) if ok else np.nan
-                         for a, b, ok in zip(k, r, simple)])
-    intervals = np.where(simple, rows[:, ROW.interval], np.nan)
-    second = np.where(model == MODEL_PAPER, cases[:, C.xi], cases[:, C.kappa])
-    each = np.empty((cases.shape[0], 3, phases.shape[0]))
-    steady_histories(model.astype(np.int64), np.ascontiguousarray(k),
-                     np.ascontiguousarray(second), launches, intervals, phases, each)
-    usable = (status == S.ok)[:, None]
-    scale = np.abs(w)[:, None]
-    per_point = each[index]
-    for row, values in ((H.swing_angle, per_point[:, SWING]),
-                        (H.swing_rate, per_point[:, RATE] * scale),
-                        (H.swing_acceleration, per_point[:, ACCELERATION] * scale ** 2),
-                        (H.rotor_angle, phases[None, :] * intervals[index][:, None]),
-                        (H.time, phases[None, :] * intervals[index][:, None] / scale)):
-        prof[row] = np.where(usable & np.isfinite(per_point[:, SWING]), values, np.nan)
-    return prof
+    loads = np.full((N_LOADS, index.shape[0]), np.nan)
+    if phases.shape[0] == 0 and not set(method.outputs) & set(LOAD_OUTPUTS):
+        return prof, loads
+    each = np.full((cases.shape[0], N_HISTORY, phases.shape[0]), np.nan)
+    each_loads = np.full((cases.shape[0], N_LOADS), np.nan)
+    cycle = ((cases[:, C.tool] == TOOL_ROTOR_STOP) & (rows[:, ROW.outcome] == SEQUENCE_CYCLE)
+             & (rows[:, ROW.period] == 1) & (rows[:, ROW.chatter] == 0))
+    for c in np.flatnonzero(cycle):
+        case, row = cases[c], rows[c]
+        model, k, r = int(case[C.model]), case[C.k], case[C.R]
+        geometry = striker_geometry(k, case[C.xi], case[C.kappa])
+        if model == MODEL_ROTOR:
+            from kernels.pendulum.systems import rotor_parameters
+            rotor_cycle(rotor_parameters(case), k, r, geometry,
+                        (row[ROW.section_0], row[ROW.section_1]),
+                        row[ROW.interval] / row[ROW.rotor_speed], phases, each[c],
+                        each_loads[c])
+        else:
+            second = case[C.xi] if model == MODEL_PAPER else case[C.kappa]
+            driven_cycle(model, k, second, r, geometry, steady_state_speed(k, r),
+                         row[ROW.interval], phases, each[c], each_loads[c])
+    w, l2, mass = np.abs(p["omega1"]), p["l2"], p["striker_mass"]
+    force, torque = mass * l2 * w * w, mass * l2 * l2 * w * w
+    usable = status == S.ok
+    history = np.where(usable[:, None, None], each[index], np.nan)
+    for name, row, scale in (("swing_angle", SWING, 1.0), ("swing_rate", RATE, w),
+                             ("swing_acceleration", ACCELERATION, w * w),
+                             ("time", TIME, 1.0 / w), ("rotor_angle", ROTOR_ANGLE, 1.0),
+                             ("hinge_force_along", HINGE_ALONG, force),
+                             ("hinge_force_across", HINGE_ACROSS, force),
+                             ("drive_torque", DRIVE_TORQUE, torque)):
+        prof[getattr(H, name)] = history[:, row] * np.broadcast_to(scale, w.shape)[:, None]
+    prof[H.hinge_force] = np.hypot(prof[H.hinge_force_along], prof[H.hinge_force_across])
+    summary = np.where(usable[:, None], each_loads[index], np.nan).T
+    for slot, scale in ((PEAK_HINGE, force), (PEAK_TORQUE, torque),
+                        (HINGE_IMPULSE, mass * l2 * w), (MEAN_TORQUE, torque),
+                        (CYCLE_WORK, torque), (IMPACT_LOSS, torque), (CYCLE_TIME, 1.0 / w)):
+        loads[slot] = summary[slot] * scale
+    loads[CYCLE_ANGLE] = summary[CYCLE_ANGLE]
+    return prof, loads

@@ -77,6 +77,7 @@ LABELS = {
        for joint, force, _, _ in JOINTS},
     **{f"{force}_{c}": rf"$F_{{{force[1:]}}}$ {side} {link}"
        for _, force, _, link in JOINTS for c, side in (("n", "along"), ("t", "across"))},
+    **{force: rf"$|F_{{{force[1:]}}}|$ at {joint}" for joint, force, _, _ in JOINTS},
     "balancing_moment_peak": r"peak $|M_b|$", "balancing_moment_rms": r"RMS $M_b$",
     "cycle_work": "cycle work", "balancing_moment": "balancing moment $M_b$",
     "single_stage_omega1": r"single four-bar $\omega_1$",
@@ -150,7 +151,8 @@ DECLARATION = Mechanism(
                "loss)", "|M_b|max ratio", _AT_BLOWS, marks=_EQUAL),
     ),
     profiles=(
-        *ks.reaction_profiles(tuple((force, what, link) for _, force, what, link in JOINTS)),
+        *ks.reaction_profiles(tuple((force, what, link) for _, force, what, link in JOINTS),
+                              magnitude=True),
         Output("balancing_moment", "N m", "balancing moment on the crank (M_b, virtual "
                "work)", "M_b"),
     ),
@@ -394,6 +396,11 @@ def cycle_profiles(st, breaks, angles, prof):
         prof[F.F43_n, j], prof[F.F43_t, j] = res2[ks.R_F21N], res2[ks.R_F21T]
         prof[F.F54_n, j], prof[F.F54_t, j] = res2[ks.R_F32N], res2[ks.R_F32T]
         prof[F.F56_n, j], prof[F.F56_t, j] = res2[ks.R_F34N], res2[ks.R_F34T]
+        for n, t, size in ((F.F16_n, F.F16_t, F.F16), (F.F21_n, F.F21_t, F.F21),
+                           (F.F32_n, F.F32_t, F.F32), (F.F36_n, F.F36_t, F.F36),
+                           (F.F43_n, F.F43_t, F.F43), (F.F54_n, F.F54_t, F.F54),
+                           (F.F56_n, F.F56_t, F.F56)):
+            prof[size, j] = math.hypot(prof[n, j], prof[t, j])
         prof[F.balancing_moment, j] = res1[ks.R_MB]
 
 

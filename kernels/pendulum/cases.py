@@ -14,10 +14,12 @@ C = namedtuple("CaseColumns", CASE_COLUMNS)(*range(len(CASE_COLUMNS)))
 #: [omega1], method used, estimated relative error of the cycle's values (auto); on
 #: request, the cycle's margins: slowest over fastest impact speed, distance of an impact
 #: from the blade's edge [rad], the leading multiplier's modulus and argument [rad], and
-#: over several starts the distinct attractors and the share reaching the one from rest
+#: over several starts the distinct attractors and the share reaching the one from rest; the
+#: integrated cycle's section state (its tool's key, the pre-impact state of its canonical
+#: section: on the rotor stop phi1' and psi' [omega1])
 ROW_SLOTS = ("outcome", "period", "chatter", "amplitude", "frequency", "interval", "speed",
              "impacts", "acceleration", "restitution_critical", "steps", "rejected", "events",
              "rotor_speed", "method", "error", "speed_ratio", "edge", "modulus", "angle",
-             "attractors", "basin")
+             "attractors", "basin", "section_0", "section_1", "section_2")
 ROW = namedtuple("RowSlots", ROW_SLOTS)(*range(len(ROW_SLOTS)))
 N_ROW = len(ROW_SLOTS)

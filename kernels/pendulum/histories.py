@@ -1,66 +1,261 @@
-"""The steady cycle as time histories ([RP] Fig. 3): psi, psi' and psi'' over one flight of a
-constant-speed model on the rotor stop, from the impact that opens it to the next.
+"""The steady cycle on the rotor stop as time histories and loads ([RP] Fig. 3, and the
+reaction Q the paper's constant rotor speed rests on): psi, psi', psi'', the hinge's force on
+the rotor and the drive's torque over one flight, from the impact that opens it to the next,
+with their peaks, the impulse through the hinge at the impact and the drive's work.
 
-Such a cycle is a flight from psi = 0 launched at the closed form's steady speed v* (P-O6;
-kernels/pendulum/closed_form.py), away from the stop (psi' = -v*), that returns to the stop
-after the impact interval tau1, both in rotor radians (time omega1 t). The flight is stepped
-by the classical RK4 of the integration core, in equal steps of at most H_MAX landing on
-each sampled phase: a fixed grid, so a history costs the same at every design and its error
-is that of RK4 at H_MAX (about 1e-12 of the swing at the stiffest cases of the tests).
+The pendulum is a striker of mass m with its centre at l_cm = l2/lambda from the hinge A and
+centroidal inertia J_c = m l_cm^2/xi, lambda = kappa (1 + 1/xi) (1 for the paper's striker,
+contact at its centre; the rotor model's convention, systems.rotor_parameters). Units: m,
+l2, omega1 (time omega1 t; force m l2 omega1^2, torque and work m l2^2 omega1^2, impulse
+m l2 omega1).
+
+- Hinge force on the rotor: -m a_cm (Newton's second law of the striker; the paper's
+  equation is not a rigid body's, but its striker's acceleration is still m a_cm's), along
+  the pendulum A -> C (positive: pulled outward) and across it (positive: towards psi).
+- Drive torque: a constant-speed rotor's drive supplies dH_O/dt of the pendulum (its
+  angular momentum about the rotor axis O; for the rigid model the sympy torque of P5's
+  section), and at each impact the angular impulse Delta H_O; the rotor model's motor
+  supplies s_m (Omega_idle - phi1').
+- Impulse through the hinge at the impact: the pendulum's momentum change less the
+  contact's impulse, from its angular momentum about its centre (Newton-Euler); zero at the
+  centre of percussion (kappa = 1).
+- Drive work per cycle against the impact's loss (1 - R^2) v_n^2/(2 J M^-1 J^T): equal in
+  a steady cycle (the rotor model's energy, the constant-speed models' angular momentum
+  about O return each cycle, so the drive's work is the moment of the tool's impulse), so
+  their difference is the error of the history's quadrature and of the section state.
+
+A constant-speed cycle is a flight from psi = 0 launched at the closed form's steady speed
+v* (P-O6), away from the stop; the rotor model's starts from the core's pre-impact section
+state (its row's section slots) through Newton's law. The flight is stepped by the classical
+RK4 of the integration core with the drive's work as one more state, in equal steps of at
+most H_MAX landing on each sampled phase: a fixed grid, so a history costs the same at every
+design and its error is that of RK4 at H_MAX (about 1e-12 of the swing at the stiffest
+cases of the tests). Peaks are the largest sample or the vertex of the parabola through
+three samples about it.
 """
 
 import math
+from collections import namedtuple
 
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.impact.runge_kutta import METHOD_RK4, make_stepper
 from kernels.impact.tuples import relative_scales
-from kernels.pendulum.models import MODEL_PAPER, paper_rhs, rigid_rhs
+from kernels.pendulum.models import (MODEL_PAPER, paper_acceleration, rotor_accelerations,
+                                     rotor_response)
 
 #: the longest RK4 step [rotor rad]
 H_MAX = 1e-3
-#: the rows of a history: psi [rad], psi' [rad per rotor rad], psi'' [rad per rotor rad^2]
-SWING, RATE, ACCELERATION = 0, 1, 2
+#: the rows of a history: psi [rad], psi' [rad per unit time], psi'' [rad per unit time^2],
+#: time and rotor angle since the impact, hinge force on the rotor along and across the
+#: pendulum, the drive's torque
+(SWING, RATE, ACCELERATION, TIME, ROTOR_ANGLE, HINGE_ALONG, HINGE_ACROSS,
+ DRIVE_TORQUE) = range(8)
+N_HISTORY = 8
+#: a case's loads over the cycle: peak hinge force (the impact's impulse apart), peak |drive
+#: torque|, drive work per cycle (the impulse's included), the impact's loss, |impulse through
+#: the hinge|, the cycle's time, the rotor angle it turns, the drive's mean torque over time
+(PEAK_HINGE, PEAK_TORQUE, CYCLE_WORK, IMPACT_LOSS, HINGE_IMPULSE, CYCLE_TIME, CYCLE_ANGLE,
+ MEAN_TORQUE) = range(8)
+N_LOADS = 8
+
+#: the striker in m and l2 units: l1, its centre's distance from the hinge, its centroidal
+#: inertia
+Striker = namedtuple("Striker", ["l1", "l_cm", "j_c"])
+#: one instant of a flight: psi, psi', psi'', the rotor angle, the hinge's force on the rotor
+#: along and across the pendulum, the drive's torque
+Sample = namedtuple("Sample", ["swing", "rate", "acceleration", "rotor_angle", "along",
+                               "across", "torque"])
+#: a flight walked: peak hinge force, peak |drive torque|, the drive's work, the rotor angle
+Walked = namedtuple("Walked", ["hinge", "torque", "work", "angle"])
 
 
-def _make_walk(rhs):
-    """The history of one model's flight (see the module docstring), rhs its vector field."""
+@njit(**KERNEL_OPTIONS)
+def striker_geometry(k, xi, kappa):
+    """The Striker of these ratios (see the module docstring)."""
+    l_cm = 1.0 / (kappa * (1.0 + 1.0 / xi))
+    return Striker(k, l_cm, l_cm * l_cm / xi)
+
+
+@njit(**KERNEL_OPTIONS)
+def hinge_and_moment(geometry, w, dw, psi, dpsi, ddpsi):
+    """The hinge's force on the rotor (along, across the pendulum) and dH_O/dt of the
+    striker, at rotor speed w and acceleration dw."""
+    l1, l_cm, j_c = geometry
+    s, c = math.sin(psi), math.cos(psi)
+    w2, dw2 = w + dpsi, dw + ddpsi  # the pendulum's absolute speed and acceleration
+    # a_cm = l1 (dw e1' - w^2 e1) + l_cm (dw2 e2' - w2^2 e2), e' a quarter turn ahead
+    a_along = l1 * (dw * s - w * w * c) - l_cm * w2 * w2
+    a_across = l1 * (dw * c + w * w * s) + l_cm * dw2
+    a_lateral = l1 * dw + l_cm * (dw2 * c - w2 * w2 * s)  # a_cm . e1'
+    moment = j_c * dw2 + l1 * a_lateral + l_cm * a_across  # J_c phi2'' + r x a
+    return -a_along, -a_across, moment
+
+
+@njit(**KERNEL_OPTIONS)
+def hinge_impulse(geometry, dw, dpsi):
+    """The impulse through the hinge on the rotor when the rotor's speed jumps by dw and
+    psi' by dpsi at psi = 0 (all along the same normal): the pendulum's momentum change
+    less the contact's impulse at l2, the latter from its angular momentum about its
+    centre."""
+    l1, l_cm, j_c = geometry
+    momentum = (l1 + l_cm) * dw + l_cm * dpsi  # Delta v_cm
+    return -((1.0 - l_cm) * momentum - j_c * (dw + dpsi))
+
+
+@njit(**KERNEL_OPTIONS)
+def _vertex(t0, f0, t1, f1, t2, f2):
+    """The largest value of the parabola through three samples whose middle one is the
+    largest (f1 where they are flat)."""
+    d0, d2 = (f1 - f0) / (t1 - t0), (f2 - f1) / (t2 - t1)
+    curvature = (d2 - d0) / (t2 - t0)
+    if not curvature < 0.0:
+        return f1
+    slope = d0 + curvature * (t1 - t0)  # at t1
+    return f1 - slope * slope / (4.0 * curvature)
+
+
+def _make_walk(rhs, loads):
+    """The walk of one model's flight: ``rhs(y, q)`` its vector field with the drive's power
+    as the last component, ``loads(t, y, f, q) -> (psi, psi', psi'', rotor angle, hinge
+    along, across, drive torque)``."""
     step = make_stepper(rhs, relative_scales, methods=(METHOD_RK4,))
 
     @njit(**INNER_OPTIONS)
-    def walk(p, launch, interval, phases, out):
-        y = (0.0, -launch)
-        f = rhs(y, p)
+    def walk(q, y, duration, phases, out):
+        """Steps over ``duration`` from y (just after the impact), the history at
+        ``phases`` (fractions of it) into out[row, phase]; the flight Walked."""
+        f = rhs(y, q)
+        sample = loads(0.0, y, f, q)
+        # the last two samples (time, |Q|, |tau|) before the newest, for the vertices
+        t_a = q_a = m_a = -1.0
+        t_b, q_b, m_b = 0.0, math.hypot(sample.along, sample.across), abs(sample.torque)
+        peak_hinge, peak_torque = q_b, m_b
         tau = 0.0
-        for j in range(phases.shape[0]):
-            target = phases[j] * interval
+        n = phases.shape[0]
+        for j in range(n + 1):
+            target = duration if j == n else phases[j] * duration
             count = max(1, math.ceil((target - tau) / H_MAX))
             h = (target - tau) / count
-            for _ in range(count):
-                y, f, err = step(METHOD_RK4, y, f, h, p, 0.0, 0.0)
+            for i in range(count):
+                y, f, err = step(METHOD_RK4, y, f, h, q, 0.0, 0.0)
+                t_c = tau + (i + 1) * h if i + 1 < count else target
+                sample = loads(t_c, y, f, q)
+                if not t_c > t_b:
+                    continue  # a phase on the last sample: nothing new
+                q_c, m_c = math.hypot(sample.along, sample.across), abs(sample.torque)
+                peak_hinge, peak_torque = max(peak_hinge, q_c), max(peak_torque, m_c)
+                if t_a >= 0.0 and q_b >= q_a and q_b >= q_c:
+                    peak_hinge = max(peak_hinge, _vertex(t_a, q_a, t_b, q_b, t_c, q_c))
+                if t_a >= 0.0 and m_b >= m_a and m_b >= m_c:
+                    peak_torque = max(peak_torque, _vertex(t_a, m_a, t_b, m_b, t_c, m_c))
+                t_a, q_a, m_a, t_b, q_b, m_b = t_b, q_b, m_b, t_c, q_c, m_c
             tau = target
-            out[SWING, j], out[RATE, j], out[ACCELERATION, j] = y[0], y[1], f[1]
+            if j < n:
+                out[SWING, j], out[RATE, j] = sample.swing, sample.rate
+                out[ACCELERATION, j] = sample.acceleration
+                out[ROTOR_ANGLE, j], out[TIME, j] = sample.rotor_angle, target
+                out[HINGE_ALONG, j], out[HINGE_ACROSS, j] = sample.along, sample.across
+                out[DRIVE_TORQUE, j] = sample.torque
+        return Walked(peak_hinge, peak_torque, y[-1], sample.rotor_angle)
 
     return walk
 
 
-_paper_walk = _make_walk(paper_rhs)
-_rigid_walk = _make_walk(rigid_rhs)
+# ---------------------------------------------------------------- constant rotor speed
+
+@njit(**INLINE_OPTIONS)
+def _driven_loads(t, y, f, q):
+    pendulum, geometry = q
+    along, across, moment = hinge_and_moment(geometry, 1.0, 0.0, y[0], y[1], f[1])
+    return Sample(y[0], y[1], f[1], t, along, across, moment)
+
+
+@njit(**INLINE_OPTIONS)
+def _paper_rhs(y, q):
+    (k, xi), geometry = q
+    ddpsi = paper_acceleration(y[0], y[1], k, xi)
+    return (y[1], ddpsi, hinge_and_moment(geometry, 1.0, 0.0, y[0], y[1], ddpsi)[2])
+
+
+@njit(**INLINE_OPTIONS)
+def _rigid_rhs(y, q):
+    (k, kappa), geometry = q
+    ddpsi = -kappa * k * math.sin(y[0])
+    return (y[1], ddpsi, hinge_and_moment(geometry, 1.0, 0.0, y[0], y[1], ddpsi)[2])
+
+
+_paper_walk = _make_walk(_paper_rhs, _driven_loads)
+_rigid_walk = _make_walk(_rigid_rhs, _driven_loads)
 
 
 @njit(**KERNEL_OPTIONS)
-def steady_histories(models, ks, seconds, launches, intervals, phases, out):
-    """For each case c (model code, k, its xi (paper) or kappa (rigid), launch speed v* and
-    impact interval tau1, NaN where it has no such cycle): its history at ``phases``
-    (fractions of tau1, increasing) into out[c, row, phase], in omega1 units; NaN where
-    none."""
-    for c in range(models.shape[0]):
-        if not (math.isfinite(launches[c]) and math.isfinite(intervals[c])):
-            out[c, :, :] = math.nan
-            continue
-        p = (ks[c], seconds[c])
-        if models[c] == MODEL_PAPER:
-            _paper_walk(p, launches[c], intervals[c], phases, out[c])
-        else:
-            _rigid_walk(p, launches[c], intervals[c], phases, out[c])
+def driven_cycle(model, k, second, r, geometry, launch, interval, phases, out, loads):
+    """The cycle of a constant-speed model (second: its xi or kappa) launched at v* from
+    the stop: its history into out[row, phase] and its loads into loads[:]."""
+    q = ((k, second), geometry)
+    y = (0.0, -launch, 0.0)
+    if model == MODEL_PAPER:
+        walked = _paper_walk(q, y, interval, phases, out)
+    else:
+        walked = _rigid_walk(q, y, interval, phases, out)
+    l1, l_cm, j_c = geometry
+    jump = -2.0 * launch  # psi' from +v* to -v*: Newton's law at the cycle's fixed point
+    loads[PEAK_HINGE], loads[PEAK_TORQUE] = walked.hinge, walked.torque
+    # the drive's angular impulse holds the rotor: Delta H_O at psi = 0 less the moment of
+    # the tool's impulse on the striker at l1 + l2 (its momentum change less the hinge's)
+    through_hinge = hinge_impulse(geometry, 0.0, jump)
+    from_tool = l_cm * jump + through_hinge
+    loads[CYCLE_WORK] = (walked.work + (j_c + l_cm * (l1 + l_cm)) * jump
+                         - (l1 + 1.0) * from_tool)
+    speed = 1.0 + k + launch  # the striker's normal speed before the impact
+    loads[IMPACT_LOSS] = 0.5 * (1.0 - r * r) * (j_c + l_cm * l_cm) * speed * speed
+    loads[HINGE_IMPULSE] = abs(through_hinge)
+    loads[CYCLE_TIME], loads[CYCLE_ANGLE] = interval, walked.angle
+    loads[MEAN_TORQUE] = loads[CYCLE_WORK] / interval
+
+
+# ---------------------------------------------------------------- rotor of finite inertia
+
+@njit(**INLINE_OPTIONS)
+def _rotor_rhs(y, q):
+    (k, xi, j1, slope, idle), geometry = q
+    dw, ddpsi = rotor_accelerations(y[1], y[2], y[3], k, xi, j1, slope, idle)
+    return (y[1], dw, y[3], ddpsi, slope * (idle - y[1]) * y[1])
+
+
+@njit(**INLINE_OPTIONS)
+def _rotor_loads(t, y, f, q):
+    (k, xi, j1, slope, idle), geometry = q
+    along, across, moment = hinge_and_moment(geometry, y[1], f[1], y[2], y[3], f[3])
+    # the motor's torque is in J_c omega1^2
+    return Sample(y[2], y[3], f[3], y[0], along, across,
+                  geometry.j_c * slope * (idle - y[1]))
+
+
+_rotor_walk = _make_walk(_rotor_rhs, _rotor_loads)
+
+
+@njit(**KERNEL_OPTIONS)
+def rotor_cycle(p, k, r, geometry, before, duration, phases, out, loads):
+    """The cycle of the rotor model (p: its parameters, systems.rotor_parameters; k in l2)
+    from its pre-impact section state ``before`` = (phi1', psi') at psi = 0: Newton's law
+    (the core's, along J = (1 + k, 1)), then the flight over ``duration``."""
+    w, dpsi = before
+    j_phi, j_psi = 1.0 + k, 1.0
+    x_phi, x_psi = rotor_response((0.0, w, 0.0, dpsi), j_phi, j_psi, p)
+    approach = j_phi * w + j_psi * dpsi
+    effective = j_phi * x_phi + j_psi * x_psi  # J M^-1 J^T, in J_c and l_cm lambda units
+    impulse = -(1.0 + r) * approach / effective
+    y = (0.0, w + x_phi * impulse, 0.0, dpsi + x_psi * impulse, 0.0)
+    walked = _rotor_walk((p, geometry), y, duration, phases, out)
+    j_c = geometry.j_c
+    loads[PEAK_HINGE], loads[PEAK_TORQUE] = walked.hinge, walked.torque
+    loads[CYCLE_WORK] = j_c * walked.work
+    loads[IMPACT_LOSS] = j_c * 0.5 * (1.0 - r * r) * approach * approach / effective
+    loads[HINGE_IMPULSE] = abs(hinge_impulse(geometry, x_phi * impulse, x_psi * impulse))
+    loads[CYCLE_TIME], loads[CYCLE_ANGLE] = duration, walked.angle
+    k_cm, xi, j1, slope, idle = p  # the motor law is linear: its mean is at the mean speed
+    loads[MEAN_TORQUE] = j_c * slope * (idle - walked.angle / duration)
+

@@ -228,6 +228,8 @@ def write_row(row, s, cost, attractors, basin, frequency):
     row[ROW.speed_ratio] = m.speed_min / m.speed_max
     row[ROW.edge] = m.edge if math.isfinite(m.edge) else math.nan
     row[ROW.modulus], row[ROW.angle] = m.modulus, m.angle
+    for i in range(len(s.key)):
+        row[ROW.section_0 + i] = s.key[i]
 
 
 @njit(**INLINE_OPTIONS)
