@@ -79,7 +79,9 @@ def main():
         "machine": platform.node(), "against": args.against, "example": args.example,
         "this_compile_cpu_s": sum(this.values()), "other_compile_cpu_s": sum(other.values()),
         "only_this": {k: v for k, v in sorted(this.items()) if k not in other},
-        "only_other": {k: v for k, v in sorted(other.items()) if k not in this}}
+        "only_other": {k: v for k, v in sorted(other.items()) if k not in this},
+        "both": {k: [this[k], other[k]] for k in sorted(this, key=lambda k: other.get(k, 0)
+                                                     - this[k]) if k in other}}
     result["only_this_cpu_s"] = sum(result["only_this"].values())
     result["only_other_cpu_s"] = sum(result["only_other"].values())
     name = f"compile_events_{args.example}" + (f"_{args.label}" if args.label else "")

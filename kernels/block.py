@@ -18,24 +18,19 @@ import numpy as np
 #: the loop: for each design (column) i of ``params`` (n_parameters, n),
 #: ``status[i] = point(i, pr, settings, out_i, prof_i)`` with pr the design's parameters
 #: (the rows of its declaration), out_i its outputs and prof_i its profiles [profile,
-#: angle], NaN until the point writes them; out_i into ``out[:, i]`` and prof_i into
-#: ``prof[:, i, :]``. ``settings``: the method's options and block-wide data, by name.
+#: angle], views of the block's arrays, NaN until the point writes them. ``settings``: the
+#: method's options and block-wide data, by name. Scalar loops and views only: a temporary
+#: per design and the slice assignments that fill it were half of a small kernel's first
+#: compile (benchmarks/compile_events.py)
 LOOP = """
 def {name}(params, settings, out, status, prof):
-    pr = _np.empty(params.shape[0])
-    out_i = _np.empty(out.shape[0])
-    prof_i = _np.empty((prof.shape[0], prof.shape[2]))
     for i in range(params.shape[1]):
-        for k in range(params.shape[0]):
-            pr[k] = params[k, i]
-        out_i[:] = _np.nan
-        prof_i[:] = _np.nan
-        status[i] = {point}(i, pr, settings, out_i, prof_i)
         for k in range(out.shape[0]):
-            out[k, i] = out_i[k]
+            out[k, i] = _np.nan
         for k in range(prof.shape[0]):
             for j in range(prof.shape[2]):
-                prof[k, i, j] = prof_i[k, j]
+                prof[k, i, j] = _np.nan
+        status[i] = {point}(i, params[:, i], settings, out[:, i], prof[:, i, :])
 """
 
 

@@ -499,6 +499,21 @@ def working_transmission_angle(lam0, lam2, lam3, phi_star, window, mu_opposite, 
 @njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): its linkage's outputs by name, its status."""
+    return _linkage_outputs(pr, settings, out).status
+
+
+@njit(**INLINE_OPTIONS)
+def design_with_profiles(i, pr, settings, out, prof):
+    """One grid point with its profiles over settings.angles ([CR] Fig. 2)."""
+    lp = _linkage_outputs(pr, settings, out)
+    if lp.status == S.ok or lp.status == S.second_special_position:  # the usable statuses
+        _rocker_profiles(lp, settings, prof)
+    return lp.status
+
+
+@njit(**INLINE_OPTIONS)
+def _linkage_outputs(pr, settings, out):
+    """The point's LinkagePoint, its outputs written by name."""
     lp = linkage_point(
         int(pr[P.type]), pr[P.R], pr[P.largest_link], pr[P.lambda0], pr[P.lambda2],
         pr[P.lambda3], int(pr[P.base_root]), pr[P.crank_length], pr[P.omega1], pr[P.sigma],
@@ -518,24 +533,27 @@ def design(i, pr, settings, out, prof):
     out[O.restitution_kinematic_max] = lp.restitution_kinematic_max
     out[O.envelope], out[O.crank_length], out[O.omega1] = (lp.envelope, lp.crank_length,
                                                          lp.omega1)
+    return lp
+
+
+@njit(**INLINE_OPTIONS)
+def _rocker_profiles(lp, settings, prof):
+    """u31 and the rocker's angle over the cycle ([CR] Fig. 2) into prof."""
     angles = settings.angles
-    if lp.status == S.ok or lp.status == S.second_special_position:  # the usable statuses
-        # the rocker's angle at the node: the profile is counted within pi of it (the swing
-        # never wraps)
+    # the rocker's angle at the node: the profile is counted within pi of it (the swing
+    # never wraps)
+    c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(
+        lp.special_crank_angle, lp.lambda0, 1.0, lp.lambda2, lp.lambda3,
+        lp.assembly_branch, settings.geometry_tol)
+    node3 = math.atan2(s3, c3)
+    for j in range(angles.shape[0]):
+        sigma = path_branch(angles[j], lp.assembly_branch, lp.special_crank_angle,
+                            int(lp.special_position_count), settings.path)
         c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(
-            lp.special_crank_angle, lp.lambda0, 1.0, lp.lambda2, lp.lambda3,
-            lp.assembly_branch, settings.geometry_tol)
-        node3 = math.atan2(s3, c3)
-        for j in range(angles.shape[0]):  # [CR] Fig. 2: the rocker's motion over the cycle
-            sigma = path_branch(angles[j], lp.assembly_branch, lp.special_crank_angle,
-                                int(lp.special_position_count), settings.path)
-            c1, s1, c2, s2, c3, s3, u21, u31, du21, du31 = vector_kinematics(
-                angles[j], lp.lambda0, 1.0, lp.lambda2, lp.lambda3, sigma,
-                settings.geometry_tol)
-            prof[TRANSFER_RATIO, j] = u31
-            prof[ROCKER_ANGLE, j] = node3 - math.pi + (math.atan2(s3, c3) - node3
-                                                       + math.pi) % (2.0 * math.pi)
-    return lp.status
+            angles[j], lp.lambda0, 1.0, lp.lambda2, lp.lambda3, sigma, settings.geometry_tol)
+        prof[TRANSFER_RATIO, j] = u31
+        prof[ROCKER_ANGLE, j] = node3 - math.pi + (math.atan2(s3, c3) - node3
+                                                   + math.pi) % (2.0 * math.pi)
 
 
 #: the method's options the block reads, by name (angles: the profiles' crank angles)
@@ -547,8 +565,12 @@ def cycle_turns(method) -> int:
     return 2 if method.path == PATH_FREE else 1
 
 
-#: the block: each design of it by ``design`` (kernels/block.py), cached on disk
+#: the blocks: each design of it by ``design`` (kernels/block.py), cached on disk; with the
+#: profiles, compiled only where a sweep asks for them (the four-bar's kinematics over the
+#: cycle were a fifth of the example's first compile)
 crank_rocker_block = design_block(design, "crank_rocker_block", globals(), KERNEL_OPTIONS)
+crank_rocker_profile_block = design_block(design_with_profiles, "crank_rocker_profile_block",
+                                          globals(), KERNEL_OPTIONS)
 
 
 def run(params, method):
@@ -557,7 +579,8 @@ def run(params, method):
     n = params.shape[1]
     angles = DECLARATION.profile_coordinate(method)
     out, status, prof = block_arrays(DECLARATION, n, angles)
-    crank_rocker_block(np.ascontiguousarray(params),
+    block = crank_rocker_profile_block if angles.shape[0] else crank_rocker_block
+    block(np.ascontiguousarray(params),
                        Settings(geometry_tol=float(method.geometry_tol),
                                 working_window=float(method.working_window), angles=angles,
                                 path=int(method.path)),
