@@ -125,10 +125,31 @@ def machine_full_job() -> Job:
                ('mechanism = "impact_machine"\n[grid]\nomega1 = [20.0]\n',))
 
 
+#: what a mechanism compiles only where a sweep asks for it (its examples do not): its
+#: profiles, the pendulum's steady-cycle loads of each model
+ON_REQUEST = {
+    "crank_rocker": ('mechanism = "crank_rocker"\n[grid]\nR = [0.3]\ntype = ["a", "b", "c"]\n'
+                     '[fixed]\nlargest_link = 3.0\n[method]\nprofile_points = 8\n',),
+    "rotary_pendulum": tuple(
+        f'mechanism = "rotary_pendulum"\noutputs = ["amplitude", "hinge_force_peak", '
+        f'"swing_angle", "hinge_force"]\n[grid]\nk = [2.0]\n[fixed]\nmodel = "{model}"\n'
+        f'{kappa}striker_mass = 1.0\n[method]\nprofile_points = 8\n'
+        for model, kappa in (("paper", ""), ("rigid", "kappa = 1.6\n"),
+                             ("rotor", "kappa = 1.6\n"))),
+}
+
+
+def on_request_jobs(mechanisms: Iterable[str]) -> list[Job]:
+    """A job per ON_REQUEST spec of these mechanisms."""
+    return [Job(f"{name} on request ({i + 1})", "sweep.warmup:compile_spec", (text,))
+            for name in mechanisms for i, text in enumerate(ON_REQUEST.get(name, ()))]
+
+
 def mechanism_jobs(mechanisms: Sequence[str] | None = None) -> list[Job]:
     """What ``sweep warmup`` compiles for these mechanisms (default: every one): each
     built-in example of them, for the rotary pendulum each system under the default
-    method, for the impact machine its full block; the longest first."""
+    method, for the impact machine its full block, and what each compiles only on request
+    (ON_REQUEST); the longest first."""
     from sweep import example_specs, registry
 
     known = sorted(registry.MECHANISMS)
@@ -141,7 +162,8 @@ def mechanism_jobs(mechanisms: Sequence[str] | None = None) -> list[Job]:
     jobs = pendulum_system_jobs() if "rotary_pendulum" in chosen else []
     pendulum_first = sorted(of_example, key=lambda n: of_example[n] != "rotary_pendulum")
     jobs += [machine_full_job()] if "impact_machine" in chosen else []
-    return jobs + example_jobs(n for n in pendulum_first if of_example[n] in chosen)
+    return (jobs + example_jobs(n for n in pendulum_first if of_example[n] in chosen)
+            + on_request_jobs(chosen))
 
 
 def warm_up_mechanisms(mechanisms: Sequence[str] | None = None, workers: int | None = None,

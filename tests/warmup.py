@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numba
 
-from sweep.warmup import Job, cores, example_jobs, machine_full_job, run_jobs
+from sweep.warmup import Job, cores, example_jobs, machine_full_job, on_request_jobs, run_jobs
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -74,23 +74,6 @@ def joint_forces():
 
     pr = np.array([q.encode(q.default) for q in kt.DECLARATION.parameters], dtype=float)
     kt.joint_forces(0.5, pr, float(pr[kt.P.sigma]), np.empty(kt.N_RESULT), 1e-9)
-
-
-def pendulum_loads():
-    """The steady cycle's histories and loads of the three models (kernels/pendulum/
-    histories.py), each on one cycle."""
-    import numpy as np
-
-    from kernels.pendulum import histories
-    from kernels.pendulum.models import MODEL_PAPER, MODEL_RIGID
-
-    striker = histories.striker_geometry(2.0, 4.0, 1.5)
-    out, loads = np.empty((histories.N_HISTORY, 2)), np.empty(histories.N_LOADS)
-    phases = np.array([0.25, 0.75])
-    for model in (MODEL_PAPER, MODEL_RIGID):
-        histories.driven_cycle(model, 2.0, 1.5, 0.1, striker, 3.6, 0.01, phases, out, loads)
-    histories.rotor_cycle((3.0, 4.0, 60.0, 20.0, 1.0), 2.0, 0.1, striker, (1.0, 3.0), 0.01,
-                          phases, out, loads)
 
 
 # ---------------------------------------------------------------- the lists
@@ -152,8 +135,8 @@ def jobs(slow: bool) -> list[Job]:
     """The warm-up of the fast loop, or of the whole suite: the longest first."""
     selected = _entry_jobs(FAST_ENTRY_POINTS + (SLOW_ENTRY_POINTS if slow else ()))
     return (selected + [machine_full_job()] + _examples() + _probe_jobs()
-            + [Job("joint forces", "tests.warmup:joint_forces"),
-               Job("pendulum loads", "tests.warmup:pendulum_loads")])
+            + on_request_jobs(("crank_rocker", "rotary_pendulum"))
+            + [Job("joint forces", "tests.warmup:joint_forces")])
 
 
 # ---------------------------------------------------------------- running it
