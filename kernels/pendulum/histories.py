@@ -30,8 +30,8 @@ state (its row's section slots) through Newton's law. The flight is stepped by t
 RK4 of the integration core with the drive's work as one more state, in equal steps of at
 most H_MAX landing on each sampled phase: a fixed grid, so a history costs the same at every
 design and its error is that of RK4 at H_MAX (about 1e-12 of the swing at the stiffest
-cases of the tests). Peaks are the largest sample or the vertex of the parabola through
-three samples about it.
+cases of the tests). Peaks are the largest sample, refined by the package's golden-section
+search (kernels/extrema.py) between its neighbours.
 """
 
 import math
@@ -40,10 +40,13 @@ from collections import namedtuple
 from numba import njit
 
 from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
+from kernels.extrema import peak_search
 from kernels.impact.runge_kutta import METHOD_RK4, make_stepper
 from kernels.impact.tuples import relative_scales
-from kernels.pendulum.models import (MODEL_PAPER, paper_acceleration, rotor_accelerations,
-                                     rotor_response)
+from kernels.impact.impact_map import make_restitute
+from kernels.pendulum.models import (MODEL_PAPER, ROTOR, kinetic_energy, paper_acceleration,
+                                     rotor_accelerations)
+from kernels.pendulum.tools import rotor_stop
 
 #: the longest RK4 step [rotor rad]
 H_MAX = 1e-3
@@ -104,34 +107,47 @@ def hinge_impulse(geometry, dw, dpsi):
     return -((1.0 - l_cm) * momentum - j_c * (dw + dpsi))
 
 
-@njit(**KERNEL_OPTIONS)
-def _vertex(t0, f0, t1, f1, t2, f2):
-    """The largest value of the parabola through three samples whose middle one is the
-    largest (f1 where they are flat)."""
-    d0, d2 = (f1 - f0) / (t1 - t0), (f2 - f1) / (t2 - t1)
-    curvature = (d2 - d0) / (t2 - t0)
-    if not curvature < 0.0:
-        return f1
-    slope = d0 + curvature * (t1 - t0)  # at t1
-    return f1 - slope * slope / (4.0 * curvature)
+#: the golden-section search stops at brackets this short [time]
+PEAK_BRACKET = 1e-10
 
 
 def _make_walk(rhs, loads):
     """The walk of one model's flight: ``rhs(y, q)`` its vector field with the drive's power
-    as the last component, ``loads(t, y, f, q) -> (psi, psi', psi'', rotor angle, hinge
-    along, across, drive torque)``."""
+    as the last component, ``loads(t, y, f, q) -> Sample``."""
     step = make_stepper(rhs, relative_scales, methods=(METHOD_RK4,))
+
+    @njit(**INNER_OPTIONS)
+    def at(x, data):
+        """The Sample at time x, one RK4 step on from the state (y, f) at time t."""
+        q, y, f, t = data
+        y1, f1, err = step(METHOD_RK4, y, f, x - t, q, 0.0, 0.0)
+        return loads(x, y1, f1, q)
+
+    @njit(**INNER_OPTIONS)
+    def hinge_at(x, data):
+        sample = at(x, data)
+        return math.hypot(sample.along, sample.across)
+
+    @njit(**INNER_OPTIONS)
+    def torque_at(x, data):
+        return abs(at(x, data).torque)
+
+    golden_hinge, golden_torque = peak_search(hinge_at)[0], peak_search(torque_at)[0]
 
     @njit(**INNER_OPTIONS)
     def walk(q, y, duration, phases, out):
         """Steps over ``duration`` from y (just after the impact), the history at
-        ``phases`` (fractions of it) into out[row, phase]; the flight Walked."""
+        ``phases`` (fractions of it) into out[row, phase]; the flight Walked. Each peak:
+        the largest sample, refined by golden section between its two neighbours (the
+        state at the left one stepped on exactly)."""
         f = rhs(y, q)
         sample = loads(0.0, y, f, q)
-        # the last two samples (time, |Q|, |tau|) before the newest, for the vertices
-        t_a = q_a = m_a = -1.0
-        t_b, q_b, m_b = 0.0, math.hypot(sample.along, sample.across), abs(sample.torque)
-        peak_hinge, peak_torque = q_b, m_b
+        # per quantity: its largest sample so far, the sample before it (time and state)
+        # and the time of the one after it (inf: none yet)
+        t_last, y_last, f_last = 0.0, y, f
+        q_best, q_left, q_right = math.hypot(sample.along, sample.across), (0.0, y, f), 0.0
+        m_best, m_left, m_right = abs(sample.torque), (0.0, y, f), 0.0
+        q_pending = m_pending = True
         tau = 0.0
         n = phases.shape[0]
         for j in range(n + 1):
@@ -140,17 +156,20 @@ def _make_walk(rhs, loads):
             h = (target - tau) / count
             for i in range(count):
                 y, f, err = step(METHOD_RK4, y, f, h, q, 0.0, 0.0)
-                t_c = tau + (i + 1) * h if i + 1 < count else target
-                sample = loads(t_c, y, f, q)
-                if not t_c > t_b:
+                t_now = tau + (i + 1) * h if i + 1 < count else target
+                sample = loads(t_now, y, f, q)
+                if not t_now > t_last:
                     continue  # a phase on the last sample: nothing new
-                q_c, m_c = math.hypot(sample.along, sample.across), abs(sample.torque)
-                peak_hinge, peak_torque = max(peak_hinge, q_c), max(peak_torque, m_c)
-                if t_a >= 0.0 and q_b >= q_a and q_b >= q_c:
-                    peak_hinge = max(peak_hinge, _vertex(t_a, q_a, t_b, q_b, t_c, q_c))
-                if t_a >= 0.0 and m_b >= m_a and m_b >= m_c:
-                    peak_torque = max(peak_torque, _vertex(t_a, m_a, t_b, m_b, t_c, m_c))
-                t_a, q_a, m_a, t_b, q_b, m_b = t_b, q_b, m_b, t_c, q_c, m_c
+                q_now, m_now = math.hypot(sample.along, sample.across), abs(sample.torque)
+                if q_pending:
+                    q_right, q_pending = t_now, False
+                if m_pending:
+                    m_right, m_pending = t_now, False
+                if q_now > q_best:
+                    q_best, q_left, q_pending = q_now, (t_last, y_last, f_last), True
+                if m_now > m_best:
+                    m_best, m_left, m_pending = m_now, (t_last, y_last, f_last), True
+                t_last, y_last, f_last = t_now, y, f
             tau = target
             if j < n:
                 out[SWING, j], out[RATE, j] = sample.swing, sample.rate
@@ -158,6 +177,15 @@ def _make_walk(rhs, loads):
                 out[ROTOR_ANGLE, j], out[TIME, j] = sample.rotor_angle, target
                 out[HINGE_ALONG, j], out[HINGE_ACROSS, j] = sample.along, sample.across
                 out[DRIVE_TORQUE, j] = sample.torque
+        if q_pending:  # the largest sample is the last one
+            q_right = t_last
+        if m_pending:
+            m_right = t_last
+        t_q, y_q, f_q = q_left
+        t_m, y_m, f_m = m_left
+        peak_hinge = max(q_best, golden_hinge((q, y_q, f_q, t_q), t_q, q_right, PEAK_BRACKET))
+        peak_torque = max(m_best, golden_torque((q, y_m, f_m, t_m), t_m, m_right,
+                                                PEAK_BRACKET))
         return Walked(peak_hinge, peak_torque, y[-1], sample.rotor_angle)
 
     return walk
@@ -237,25 +265,25 @@ def _rotor_loads(t, y, f, q):
 _rotor_walk = _make_walk(_rotor_rhs, _rotor_loads)
 
 
+#: Newton's law on the rotor stop, the integration core's (impact_map.make_restitute)
+_rotor_restitute = make_restitute(rotor_stop(ROTOR))
+
+
 @njit(**KERNEL_OPTIONS)
 def rotor_cycle(p, k, r, geometry, before, duration, phases, out, loads):
     """The cycle of the rotor model (p: its parameters, systems.rotor_parameters; k in l2)
-    from its pre-impact section state ``before`` = (phi1', psi') at psi = 0: Newton's law
-    (the core's, along J = (1 + k, 1)), then the flight over ``duration``."""
+    from its pre-impact section state ``before`` = (phi1', psi') at psi = 0: the core's
+    Newton law, then the flight over ``duration``."""
     w, dpsi = before
-    j_phi, j_psi = 1.0 + k, 1.0
-    x_phi, x_psi = rotor_response((0.0, w, 0.0, dpsi), j_phi, j_psi, p)
-    approach = j_phi * w + j_psi * dpsi
-    effective = j_phi * x_phi + j_psi * x_psi  # J M^-1 J^T, in J_c and l_cm lambda units
-    impulse = -(1.0 + r) * approach / effective
-    y = (0.0, w + x_phi * impulse, 0.0, dpsi + x_psi * impulse, 0.0)
-    walked = _rotor_walk((p, geometry), y, duration, phases, out)
+    approach = (0.0, w, 0.0, dpsi)
+    t, y = _rotor_restitute(0.0, approach, (0.0, k), p, r)  # the stop's data: level, k
+    walked = _rotor_walk((p, geometry), y + (0.0,), duration, phases, out)
     j_c = geometry.j_c
     loads[PEAK_HINGE], loads[PEAK_TORQUE] = walked.hinge, walked.torque
     loads[CYCLE_WORK] = j_c * walked.work
-    loads[IMPACT_LOSS] = j_c * 0.5 * (1.0 - r * r) * approach * approach / effective
-    loads[HINGE_IMPULSE] = abs(hinge_impulse(geometry, x_phi * impulse, x_psi * impulse))
+    # the kinetic energy (P8, in J_c omega1^2) the impact takes
+    loads[IMPACT_LOSS] = j_c * (kinetic_energy(approach, p) - kinetic_energy(y, p))
+    loads[HINGE_IMPULSE] = abs(hinge_impulse(geometry, y[1] - w, y[3] - dpsi))
     loads[CYCLE_TIME], loads[CYCLE_ANGLE] = duration, walked.angle
     k_cm, xi, j1, slope, idle = p  # the motor law is linear: its mean is at the mean speed
     loads[MEAN_TORQUE] = j_c * slope * (idle - walked.angle / duration)
-
