@@ -13,7 +13,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, KERNEL_OPTIONS
 from kernels.block import block_arrays, design_block
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Boundary, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol, path,
