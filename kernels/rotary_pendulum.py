@@ -29,7 +29,7 @@ from kernels.pendulum.histories import (ACCELERATION, CYCLE_ANGLE, CYCLE_TIME, C
                                        DRIVE_TORQUE, HINGE_ACROSS, HINGE_ALONG, HINGE_IMPULSE,
                                        IMPACT_LOSS, MEAN_TORQUE, N_HISTORY, N_LOADS,
                                        PEAK_HINGE, PEAK_TORQUE, RATE, ROTOR_ANGLE, SWING, TIME,
-                                       driven_cycle, rotor_cycle, striker_geometry)
+                                       driven_cycle, striker_geometry)
 from kernels.pendulum.models import MODEL_PAPER, MODEL_ROTOR
 from kernels.pendulum.table import (MODELS, SYSTEMS, TOOL_LAB_WINDOW, TOOL_ROTOR_STOP, TOOLS,
                                    with_closed_form)
@@ -242,23 +242,24 @@ DECLARATION = Mechanism(
         Output("blow_rate", "min-1", "blows per minute in steady state: 60 times the mean "
                "rotor speed over the rotor angle between impacts", on_request=True),
         Output("hinge_force_peak", "N", "peak force of the pendulum's hinge on the rotor over "
-               "the steady cycle, the impact's impulse apart (a period-1 cycle on the rotor "
-               "stop; NaN elsewhere)", "|Q|max", on_request=True),
-        Output("hinge_impulse", "N s", "impulse through the hinge on the rotor at each "
-               "impact of the steady cycle: zero where the contact is at the centre of "
-               "percussion (kappa = 1), the paper's premise for a constant rotor speed",
+               "the steady cycle, the impacts' impulses apart (NaN on a cycle that "
+               "slides along the blade or chatters)", "|Q|max", on_request=True),
+        Output("hinge_impulse", "N s", "largest impulse through the hinge on the rotor "
+               "at an impact of the steady cycle: on the rotor stop zero where the "
+               "contact is at the centre of percussion (kappa = 1), the paper's premise "
+               "for a constant rotor speed",
                "S_Q", on_request=True),
         Output("drive_torque_peak", "N m", "peak |torque| of the rotor's drive over the "
                "steady cycle: at constant rotor speed the torque that holds it (dH_O/dt of "
-               "the pendulum), its impulse at the impact apart; the rotor model's motor "
+               "the pendulum), its impulses at the impacts apart; the rotor model's motor "
                "torque", "|M_d|max", on_request=True),
         Output("drive_torque_mean", "N m", "mean torque of the rotor's drive over the steady "
-               "cycle, the impact's angular impulse included", "M̄_d", on_request=True),
+               "cycle, the impacts' angular impulses included", "M̄_d", on_request=True),
         Output("drive_power_mean", "W", "mean power of the rotor's drive over the steady "
                "cycle: its work per cycle over the cycle's time", "P̄_d", on_request=True),
         Output("energy_balance_error", "1", "the drive's work per steady cycle (its "
-               "torque integrated along the cycle's history, with its angular impulse at "
-               "the impact at constant rotor speed) less the impact's loss "
+               "torque integrated along the cycle's history, with its angular impulses at "
+               "the impacts at constant rotor speed) less the impacts' losses "
                "(1 - R^2) v_n^2/(2 J M^-1 J^T), over that loss: the history's own error",
                diagnostic=True, on_request=True),
     ),
@@ -311,8 +312,8 @@ DECLARATION = Mechanism(
                  "requested of the outputs", default=1e-8, minimum=1e-11, maximum=1e-2,
                  used_when={"integrator": ("auto", "closed_form")}),
         profile_points("phases of the steady cycle's time histories and loads ([RP] "
-                       "Fig. 3; 0: none): every model on the rotor stop in a period-1 cycle "
-                       "(NaN elsewhere)"),
+                       "Fig. 3; 0: none): every model on either tool, any period (NaN on a "
+                       "cycle that slides along the blade or chatters)"),
         Quantity("starts", "1", "starting states per design for attractor_count and "
                  "basin_fraction (1: from rest only; each start costs a steady state)",
                  default=1, minimum=1, maximum=1000, integer=True),
@@ -424,10 +425,11 @@ H = DECLARATION.profile_index
 def histories(cases, rows, index, status, p, method):
     """The steady cycle's time histories (profiles[rows, n, phases]) and loads
     (loads[histories.N_LOADS, n], SI) where they are asked for (profile points, a load
-    output) and exist: a period-1 cycle on the rotor stop, the constant-speed models' from
-    the closed form's v*, the rotor model's from its row's section state
-    (kernels/pendulum/histories.py), solved once per case in omega1, l2 and striker-mass
-    units and rescaled. NaN elsewhere, and the forces without striker_mass."""
+    output) and exist: a steady cycle without a chatter, the constant-speed models' on the
+    rotor stop from the closed form's v* (kernels/pendulum/histories.py), the others from
+    their row's section state (kernels/pendulum/cycle_walk.py; NaN where they slide), solved
+    once per case in omega1, l2 and striker-mass units and rescaled. NaN elsewhere, and the
+    forces without striker_mass."""
     phases = DECLARATION.profile_coordinate(method)
     prof = np.full((len(DECLARATION.profiles), index.shape[0], phases.shape[0]), np.nan)
     loads = np.full((N_LOADS, index.shape[0]), np.nan)
@@ -435,22 +437,31 @@ def histories(cases, rows, index, status, p, method):
         return prof, loads
     each = np.full((cases.shape[0], N_HISTORY, phases.shape[0]), np.nan)
     each_loads = np.full((cases.shape[0], N_LOADS), np.nan)
-    cycle = ((cases[:, C.tool] == TOOL_ROTOR_STOP) & (rows[:, ROW.outcome] == SEQUENCE_CYCLE)
-             & (rows[:, ROW.period] == 1) & (rows[:, ROW.chatter] == 0))
-    for c in np.flatnonzero(cycle):
+    cycle = (rows[:, ROW.outcome] == SEQUENCE_CYCLE) & (rows[:, ROW.chatter] == 0)
+    closed = ((cases[:, C.tool] == TOOL_ROTOR_STOP) & (cases[:, C.model] != MODEL_ROTOR)
+              & (rows[:, ROW.period] == 1))
+    for c in np.flatnonzero(cycle & closed):
         case, row = cases[c], rows[c]
         model, k, r = int(case[C.model]), case[C.k], case[C.R]
-        geometry = striker_geometry(k, case[C.xi], case[C.kappa])
-        if model == MODEL_ROTOR:
-            from kernels.pendulum.systems import rotor_parameters
-            rotor_cycle(rotor_parameters(case), k, r, geometry,
-                        (row[ROW.section_0], row[ROW.section_1]),
-                        row[ROW.interval] / row[ROW.rotor_speed], phases, each[c],
-                        each_loads[c])
-        else:
-            second = case[C.xi] if model == MODEL_PAPER else case[C.kappa]
-            driven_cycle(model, k, second, r, geometry, steady_state_speed(k, r),
-                         row[ROW.interval], phases, each[c], each_loads[c])
+        second = case[C.xi] if model == MODEL_PAPER else case[C.kappa]
+        driven_cycle(model, k, second, r, striker_geometry(k, case[C.xi], case[C.kappa]),
+                     steady_state_speed(k, r), row[ROW.interval], phases, each[c],
+                     each_loads[c])
+    integrated = np.flatnonzero(cycle & ~closed)
+    if integrated.size:
+        from kernels.impact.runge_kutta import METHOD_DOPRI5
+        from kernels.pendulum.cycle_walk import CYCLE_WALKS, HISTORY_TOL
+        from kernels.pendulum.systems import settings_for
+        from kernels.pendulum.table import BY_CODES
+    for c in integrated:
+        case, row = cases[c], rows[c]
+        system = BY_CODES[int(case[C.model]), int(case[C.tool])]
+        settings = settings_for(system, METHOD_DOPRI5, HISTORY_TOL, HISTORY_TOL, 1e-3,
+                                method.max_impacts)
+        CYCLE_WALKS[system,](case, (row[ROW.section_0], row[ROW.section_1], row[ROW.section_2]),
+                            int(row[ROW.period]), case[C.R], settings,
+                            striker_geometry(case[C.k], case[C.xi], case[C.kappa]), phases,
+                            each[c], each_loads[c])
     w, l2, mass = np.abs(p["omega1"]), p["l2"], p["striker_mass"]
     force, torque = mass * l2 * w * w, mass * l2 * l2 * w * w
     usable = status == S.ok

@@ -125,24 +125,38 @@ def machine_full_job() -> Job:
                ('mechanism = "impact_machine"\n[grid]\nomega1 = [20.0]\n',))
 
 
-#: what a mechanism compiles only where a sweep asks for it (its examples do not): its
-#: profiles, the pendulum's steady-cycle loads of each model
+def _pendulum_loads(model: str, tool: str) -> str:
+    """A pendulum spec asking for the steady cycle's loads and histories on a system where
+    it has a cycle (plastic on the blade: a slide and a flight)."""
+    blade = tool == "lab_window"
+    return (f'mechanism = "rotary_pendulum"\noutputs = ["amplitude", "hinge_force_peak", '
+            f'"swing_angle", "hinge_force"]\n[grid]\nk = [{1.0 if blade else 2.0}]\n'
+            f'[fixed]\nmodel = "{model}"\ntool = "{tool}"\n'
+            + ("" if model == "paper" else "kappa = 1.2\n")
+            + ('tool_window = 0.3\nR = 0.0\n' if blade else "")
+            + 'striker_mass = 1.0\n[method]\nprofile_points = 8\n')
+
+
+#: what a mechanism compiles only where a sweep asks for it (its examples do not), by a
+#: label: its profiles, the pendulum's steady-cycle loads (the constant-speed models'
+#: closed-form cycle on the stop, one function for both; each integrated system's walk)
 ON_REQUEST = {
-    "crank_rocker": ('mechanism = "crank_rocker"\n[grid]\nR = [0.3]\ntype = ["a", "b", "c"]\n'
-                     '[fixed]\nlargest_link = 3.0\n[method]\nprofile_points = 8\n',),
-    "rotary_pendulum": tuple(
-        f'mechanism = "rotary_pendulum"\noutputs = ["amplitude", "hinge_force_peak", '
-        f'"swing_angle", "hinge_force"]\n[grid]\nk = [2.0]\n[fixed]\nmodel = "{model}"\n'
-        f'{kappa}striker_mass = 1.0\n[method]\nprofile_points = 8\n'
-        for model, kappa in (("paper", ""), ("rigid", "kappa = 1.6\n"),
-                             ("rotor", "kappa = 1.6\n"))),
+    "crank_rocker": {"profiles": 'mechanism = "crank_rocker"\n[grid]\nR = [0.3]\n'
+                                 'type = ["a", "b", "c"]\n[fixed]\nlargest_link = 3.0\n'
+                                 '[method]\nprofile_points = 8\n'},
+    "rotary_pendulum": {f"loads of {model} on {tool}": _pendulum_loads(model, tool)
+                        for model, tool in (("paper", "rotor_stop"), ("rotor", "rotor_stop"),
+                                            ("paper", "lab_window"), ("rigid", "lab_window"),
+                                            ("rotor", "lab_window"))},
 }
 
 
-def on_request_jobs(mechanisms: Iterable[str]) -> list[Job]:
-    """A job per ON_REQUEST spec of these mechanisms."""
-    return [Job(f"{name} on request ({i + 1})", "sweep.warmup:compile_spec", (text,))
-            for name in mechanisms for i, text in enumerate(ON_REQUEST.get(name, ()))]
+def on_request_jobs(mechanisms: Iterable[str], leave_out: Iterable[str] = ()) -> list[Job]:
+    """A job per ON_REQUEST spec of these mechanisms, but those labelled in leave_out."""
+    left = set(leave_out)
+    return [Job(f"{name} {label}", "sweep.warmup:compile_spec", (text,))
+            for name in mechanisms for label, text in ON_REQUEST.get(name, {}).items()
+            if label not in left]
 
 
 def mechanism_jobs(mechanisms: Sequence[str] | None = None) -> list[Job]:

@@ -69,16 +69,24 @@ def test_the_histories_are_the_flight_from_the_steady_impact(model):
     assert checked >= 4
 
 
-def test_no_history_off_the_rotor_stop():
-    """The blade's cycles (flights that end on its face, slides) have none yet; the rotor
-    model's on the stop are tests/test_pendulum_loads.py's."""
+def test_histories_on_both_tools_but_none_through_a_chatter():
+    """Every steady cycle has its histories (the blade's: tests/test_pendulum_cycle_walk.py)
+    but one that accumulates a chatter: its infinitely many bounces are the core's
+    closed-form tail (a chatter design of tests/test_pendulum_models.py)."""
     ds = sweep.decode(sweep.run({
         "mechanism": "rotary_pendulum", "grid": {"tool": ["rotor_stop", "lab_window"]},
         "fixed": {"k": 2.0}, "method": {"profile_points": 8}}))
     stop, blade = ds.sel(tool="rotor_stop"), ds.sel(tool="lab_window")
     assert str(blade.status.values) == "ok"
     assert np.isfinite(stop.swing_angle.values).all()
-    assert np.isnan(blade.swing_angle.values).all()
+    assert np.isfinite(blade.swing_angle.values).all()
+    chatter = sweep.decode(sweep.run({
+        "mechanism": "rotary_pendulum", "grid": {"k": [0.926]},
+        "fixed": {"model": "rigid", "tool": "lab_window", "kappa": 25.32, "R": 0.363,
+                  "tool_window": 1.463},
+        "outputs": ["regime", "swing_angle"], "method": {"profile_points": 8}})).isel(k=0)
+    assert str(chatter.status.values) == "ok" and str(chatter.regime.values) == "chatter"
+    assert np.isnan(chatter.swing_angle.values).all()
 
 
 def test_without_profile_points_the_atlas_has_no_histories():

@@ -135,7 +135,8 @@ def jobs(slow: bool) -> list[Job]:
     """The warm-up of the fast loop, or of the whole suite: the longest first."""
     selected = _entry_jobs(FAST_ENTRY_POINTS + (SLOW_ENTRY_POINTS if slow else ()))
     return (selected + [machine_full_job()] + _examples() + _probe_jobs()
-            + on_request_jobs(("crank_rocker", "rotary_pendulum"))
+            + on_request_jobs(("crank_rocker", "rotary_pendulum"),
+                              () if slow else ("loads of rotor on lab_window",))
             + [Job("joint forces", "tests.warmup:joint_forces")])
 
 

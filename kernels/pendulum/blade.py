@@ -402,6 +402,23 @@ def _swing_coast(model):
     return coast
 
 
+def blade_section_start(model):
+    """``start(key, data, p) -> (t, y, data)``: the section contact (before its law) of a
+    blade cycle from its key (psi, G', phi1'), on the face at lab angle 0 (G = 0), met
+    rising where G' > 0 (SIDE +1), else falling."""
+    compose = model.compose
+
+    @njit(**INLINE_OPTIONS)
+    def start(key, data, p):
+        lower, window, k, level, side = data
+        psi, rate, w = key[0], key[1], key[2]
+        phi1 = 0.0 - beta(psi, k)
+        t, y = compose(phi1, phi1, w, psi, (rate - w) / h_ratio(psi, k))
+        return t, y, (lower, window, k, 0.0, 1.0 if rate > 0.0 else -1.0)
+
+    return start
+
+
 def lab_window(model, methods=OTHER_METHODS):
     """The lab-fixed blade composed with a model (see the module docstring); ``methods``:
     those compiled into its flights beside DOPRI5 (System)."""

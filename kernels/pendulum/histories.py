@@ -43,10 +43,8 @@ from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.extrema import peak_search
 from kernels.impact.runge_kutta import METHOD_RK4, make_stepper
 from kernels.impact.tuples import relative_scales
-from kernels.impact.impact_map import make_restitute
-from kernels.pendulum.models import (MODEL_PAPER, ROTOR, kinetic_energy, paper_acceleration,
+from kernels.pendulum.models import (MODEL_PAPER, paper_acceleration,
                                      rotor_accelerations)
-from kernels.pendulum.tools import rotor_stop
 
 #: the longest RK4 step [rotor rad]
 H_MAX = 1e-3
@@ -96,22 +94,40 @@ def hinge_and_moment(geometry, w, dw, psi, dpsi, ddpsi):
     return -a_along, -a_across, moment
 
 
+#: what an impact sends through the pendulum (m, l2, omega1 units): the impulse through the
+#: hinge on the rotor (along, across the pendulum, as the hinge force), the tool's impulse
+#: on the striker along the contact's normal, and the angular impulse a drive holding the
+#: rotor's speed supplies
+Impulses = namedtuple("Impulses", ["along", "across", "tool", "drive"])
+
+
 @njit(**KERNEL_OPTIONS)
-def hinge_impulse(geometry, dw, dpsi):
-    """The impulse through the hinge on the rotor when the rotor's speed jumps by dw and
-    psi' by dpsi at psi = 0 (all along the same normal): the pendulum's momentum change
-    less the contact's impulse at l2, the latter from its angular momentum about its
-    centre."""
+def impact_impulses(geometry, psi, dw, dpsi):
+    """The Impulses of an impact at psi that changes the rotor's speed by dw and psi' by
+    dpsi. The contact is at the striker's tip (l2 from the hinge), its normal across the
+    radius from O to the tip (both tools: the stop at psi = 0, the blade radial), at delta
+    = beta - psi from the pendulum's across direction. Newton-Euler of the striker: the
+    tool's impulse P from the angular momentum about the hinge A (the hinge's impulse has
+    no moment there), the hinge's from the momentum; the drive's, Delta H_O less the
+    moment of P about O."""
     l1, l_cm, j_c = geometry
-    momentum = (l1 + l_cm) * dw + l_cm * dpsi  # Delta v_cm
-    return -((1.0 - l_cm) * momentum - j_c * (dw + dpsi))
+    s, c = math.sin(psi), math.cos(psi)
+    delta = math.atan2(s, l1 + c) - psi
+    spin = dw + dpsi  # the pendulum's absolute speed's change
+    dv_along, dv_across = l1 * dw * s, l1 * dw * c + l_cm * spin  # Delta v_cm
+    tool = (j_c * spin + l_cm * dv_across) / math.cos(delta)
+    on_pendulum_along = dv_along + tool * math.sin(delta)
+    on_pendulum_across = dv_across - tool * math.cos(delta)
+    moment = j_c * spin + (l1 * c + l_cm) * dv_across + l1 * s * dv_along  # Delta H_O
+    radius = math.sqrt(l1 * l1 + 1.0 + 2.0 * l1 * c)
+    return Impulses(-on_pendulum_along, -on_pendulum_across, tool, moment - radius * tool)
 
 
 #: the golden-section search stops at brackets this short [time]
 PEAK_BRACKET = 1e-10
 
 
-def _make_walk(rhs, loads):
+def make_walk(rhs, loads):
     """The walk of one model's flight: ``rhs(y, q)`` its vector field with the drive's power
     as the last component, ``loads(t, y, f, q) -> Sample``."""
     step = make_stepper(rhs, relative_scales, methods=(METHOD_RK4,))
@@ -135,23 +151,23 @@ def _make_walk(rhs, loads):
     golden_hinge, golden_torque = peak_search(hinge_at)[0], peak_search(torque_at)[0]
 
     @njit(**INNER_OPTIONS)
-    def walk(q, y, duration, phases, out):
-        """Steps over ``duration`` from y (just after the impact), the history at
-        ``phases`` (fractions of it) into out[row, phase]; the flight Walked. Each peak:
-        the largest sample, refined by golden section between its two neighbours (the
-        state at the left one stepped on exactly)."""
+    def walk(q, y, t0, duration, phases, out):
+        """Steps over ``duration`` from y at time t0 (just after an impact), the history
+        at ``phases`` (fractions of the duration) into out[row, phase]; the flight Walked.
+        Each peak: the largest sample, refined by golden section between its two
+        neighbours (the state at the left one stepped on exactly)."""
         f = rhs(y, q)
-        sample = loads(0.0, y, f, q)
+        sample = loads(t0, y, f, q)
         # per quantity: its largest sample so far, the sample before it (time and state)
         # and the time of the one after it (inf: none yet)
-        t_last, y_last, f_last = 0.0, y, f
-        q_best, q_left, q_right = math.hypot(sample.along, sample.across), (0.0, y, f), 0.0
-        m_best, m_left, m_right = abs(sample.torque), (0.0, y, f), 0.0
+        t_last, y_last, f_last = t0, y, f
+        q_best, q_left, q_right = math.hypot(sample.along, sample.across), (t0, y, f), t0
+        m_best, m_left, m_right = abs(sample.torque), (t0, y, f), t0
         q_pending = m_pending = True
-        tau = 0.0
+        tau = t0
         n = phases.shape[0]
         for j in range(n + 1):
-            target = duration if j == n else phases[j] * duration
+            target = t0 + (duration if j == n else phases[j] * duration)
             count = max(1, math.ceil((target - tau) / H_MAX))
             h = (target - tau) / count
             for i in range(count):
@@ -214,8 +230,8 @@ def _rigid_rhs(y, q):
     return (y[1], ddpsi, hinge_and_moment(geometry, 1.0, 0.0, y[0], y[1], ddpsi)[2])
 
 
-_paper_walk = _make_walk(_paper_rhs, _driven_loads)
-_rigid_walk = _make_walk(_rigid_rhs, _driven_loads)
+paper_walk = make_walk(_paper_rhs, _driven_loads)
+rigid_walk = make_walk(_rigid_rhs, _driven_loads)
 
 
 @njit(**KERNEL_OPTIONS)
@@ -225,21 +241,17 @@ def driven_cycle(model, k, second, r, geometry, launch, interval, phases, out, l
     q = ((k, second), geometry)
     y = (0.0, -launch, 0.0)
     if model == MODEL_PAPER:
-        walked = _paper_walk(q, y, interval, phases, out)
+        walked = paper_walk(q, y, 0.0, interval, phases, out)
     else:
-        walked = _rigid_walk(q, y, interval, phases, out)
+        walked = rigid_walk(q, y, 0.0, interval, phases, out)
     l1, l_cm, j_c = geometry
     jump = -2.0 * launch  # psi' from +v* to -v*: Newton's law at the cycle's fixed point
+    impulse = impact_impulses(geometry, 0.0, 0.0, jump)
     loads[PEAK_HINGE], loads[PEAK_TORQUE] = walked.hinge, walked.torque
-    # the drive's angular impulse holds the rotor: Delta H_O at psi = 0 less the moment of
-    # the tool's impulse on the striker at l1 + l2 (its momentum change less the hinge's)
-    through_hinge = hinge_impulse(geometry, 0.0, jump)
-    from_tool = l_cm * jump + through_hinge
-    loads[CYCLE_WORK] = (walked.work + (j_c + l_cm * (l1 + l_cm)) * jump
-                         - (l1 + 1.0) * from_tool)
+    loads[CYCLE_WORK] = walked.work + impulse.drive
     speed = 1.0 + k + launch  # the striker's normal speed before the impact
     loads[IMPACT_LOSS] = 0.5 * (1.0 - r * r) * (j_c + l_cm * l_cm) * speed * speed
-    loads[HINGE_IMPULSE] = abs(through_hinge)
+    loads[HINGE_IMPULSE] = math.hypot(impulse.along, impulse.across)
     loads[CYCLE_TIME], loads[CYCLE_ANGLE] = interval, walked.angle
     loads[MEAN_TORQUE] = loads[CYCLE_WORK] / interval
 
@@ -262,28 +274,4 @@ def _rotor_loads(t, y, f, q):
                   geometry.j_c * slope * (idle - y[1]))
 
 
-_rotor_walk = _make_walk(_rotor_rhs, _rotor_loads)
-
-
-#: Newton's law on the rotor stop, the integration core's (impact_map.make_restitute)
-_rotor_restitute = make_restitute(rotor_stop(ROTOR))
-
-
-@njit(**KERNEL_OPTIONS)
-def rotor_cycle(p, k, r, geometry, before, duration, phases, out, loads):
-    """The cycle of the rotor model (p: its parameters, systems.rotor_parameters; k in l2)
-    from its pre-impact section state ``before`` = (phi1', psi') at psi = 0: the core's
-    Newton law, then the flight over ``duration``."""
-    w, dpsi = before
-    approach = (0.0, w, 0.0, dpsi)
-    t, y = _rotor_restitute(0.0, approach, (0.0, k), p, r)  # the stop's data: level, k
-    walked = _rotor_walk((p, geometry), y + (0.0,), duration, phases, out)
-    j_c = geometry.j_c
-    loads[PEAK_HINGE], loads[PEAK_TORQUE] = walked.hinge, walked.torque
-    loads[CYCLE_WORK] = j_c * walked.work
-    # the kinetic energy (P8, in J_c omega1^2) the impact takes
-    loads[IMPACT_LOSS] = j_c * (kinetic_energy(approach, p) - kinetic_energy(y, p))
-    loads[HINGE_IMPULSE] = abs(hinge_impulse(geometry, y[1] - w, y[3] - dpsi))
-    loads[CYCLE_TIME], loads[CYCLE_ANGLE] = duration, walked.angle
-    k_cm, xi, j1, slope, idle = p  # the motor law is linear: its mean is at the mean speed
-    loads[MEAN_TORQUE] = j_c * slope * (idle - walked.angle / duration)
+rotor_walk = make_walk(_rotor_rhs, _rotor_loads)

@@ -51,6 +51,19 @@ def _settle_in_place(tangent, d, t, y, data, p, r):
     return True, t, y  # the accumulated law acts where the contact is
 
 
+def stop_section_start(model):
+    """``start(key, data, p) -> (t, y, data)``: the section contact (before its law) of a
+    rotor-stop cycle from its key, (phi1', psi') at psi = 0, the rotor angle at 0."""
+    compose = model.compose
+
+    @njit(**INLINE_OPTIONS)
+    def start(key, data, p):
+        t, y = compose(0.0, 0.0, key[0], 0.0, key[1])
+        return t, y, data
+
+    return start
+
+
 def stop_flight(model, methods=OTHER_METHODS):
     """The free flight of a pendulum below a stop fixed on the rotor at psi = data[STOP_LEVEL]:
     events 0, the stop (psi rising through it), and 1, escape (psi falling through -pi);
