@@ -1,5 +1,7 @@
 """The time histories and loads of a steady cycle the integration core found (issue 64 item 3:
-every model on the blade, and cycles of any period), each against an independent method:
+every model on the blade, and cycles of any period), each against an independent method
+(tests/blade_reference.py simulates the rigid model's regimes; here every model, its forces
+and the face's reaction, from the geometry of tests/pendulum_twins.py):
 
 - the impulses of an impact (through the hinge, the tool's, the drive's angular impulse)
   against a Newton-Euler solve of the striker written in the lab's Cartesian coordinates;
@@ -21,6 +23,7 @@ from scipy.optimize import fsolve
 import sweep
 from kernels.pendulum import histories
 
+from tests.pendulum_twins import beta, h_ratio, h_slope
 from tests.test_pendulum_loads import L2, LOADS, MASS, PROFILES, dense_peak, geometry
 
 OMEGA = 30.0
@@ -65,14 +68,8 @@ def test_an_impacts_impulses_against_newton_euler_in_the_lab():
 
 # ---------------------------------------------------------------- the blade, by SciPy
 
-def beta(psi, k):
-    return math.atan2(math.sin(psi), k + math.cos(psi))
-
-
 def h_of(psi, k):
-    """dbeta/dpsi and its derivative, written out: h = (1 + k c)/X, h' = k (1 - k^2) s/X^2."""
-    x = k * k + 1 + 2 * k * math.cos(psi)
-    return (1 + k * math.cos(psi)) / x, k * (1 - k * k) * math.sin(psi) / (x * x)
+    return h_ratio(psi, k), h_slope(psi, k)
 
 
 class Striker:
