@@ -427,7 +427,7 @@ def histories(cases, rows, index, status, p, method):
     (loads[histories.N_LOADS, n], SI) where they are asked for (profile points, a load
     output) and exist: a steady cycle without a chatter, the constant-speed models' on the
     rotor stop from the closed form's v* (kernels/pendulum/histories.py), the others from
-    their row's section state (kernels/pendulum/cycle_walk.py; NaN where they slide), solved
+    their row's section state, slides included (kernels/pendulum/cycle_walk.py), solved
     once per case in omega1, l2 and striker-mass units and rescaled. NaN elsewhere, and the
     forces without striker_mass."""
     phases = DECLARATION.profile_coordinate(method)
@@ -453,13 +453,13 @@ def histories(cases, rows, index, status, p, method):
         from kernels.pendulum.cycle_walk import CYCLE_WALKS, HISTORY_TOL
         from kernels.pendulum.systems import settings_for
         from kernels.pendulum.table import BY_CODES
+        settings = {s: settings_for(s, METHOD_DOPRI5, HISTORY_TOL, HISTORY_TOL, 1e-3,
+                                    method.max_impacts) for s in SYSTEMS}
     for c in integrated:
         case, row = cases[c], rows[c]
         system = BY_CODES[int(case[C.model]), int(case[C.tool])]
-        settings = settings_for(system, METHOD_DOPRI5, HISTORY_TOL, HISTORY_TOL, 1e-3,
-                                method.max_impacts)
-        CYCLE_WALKS[system,](case, (row[ROW.section_0], row[ROW.section_1], row[ROW.section_2]),
-                            int(row[ROW.period]), case[C.R], settings,
+        key = (row[ROW.section_0], row[ROW.section_1], row[ROW.section_2])
+        CYCLE_WALKS[system,](case, key, int(row[ROW.period]), case[C.R], settings[system],
                             striker_geometry(case[C.k], case[C.xi], case[C.kappa]), phases,
                             each[c], each_loads[c])
     w, l2, mass = np.abs(p["omega1"]), p["l2"], p["striker_mass"]
