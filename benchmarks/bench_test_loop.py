@@ -6,6 +6,12 @@ and the load average before and after each, since a shared machine stretches wal
 
 Run: .venv/bin/python benchmarks/bench_test_loop.py [--skip-full]
      (writes benchmarks/results/test_loop.json)
+     .venv/bin/python benchmarks/bench_test_loop.py --against DIR [--label L] [--rounds N]
+     [TEST ...]
+     (the same tests, warm, in this tree and in another checkout's tree DIR (a `git
+     worktree` of an older commit, its kernels in a cache of their own), interleaved, on
+     the children's CPU time: tells a slower machine from a slower code; writes
+     results/test_loop_against[_L].json)
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ import os
 import platform
 import re
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -30,18 +37,19 @@ def load() -> float:
     return os.getloadavg()[0]
 
 
-def timed(command: list[str], cwd: Path) -> dict:
+def timed(command: list[str], cwd: Path, env: dict | None = None) -> dict:
     """One command as a whole process: wall and CPU seconds, what pytest and the warm-up
     said of their own time, and the load average around it."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     load_before = load()
     started = time.perf_counter()
-    done = subprocess.run(command, cwd=cwd, capture_output=True, text=True)
+    done = subprocess.run(command, cwd=cwd, capture_output=True, text=True, env=env)
     wall = time.perf_counter() - started
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     text = done.stdout + done.stderr
     tests = re.search(r"(\d+) passed.* in ([\d.]+)s", text)
     warmup = re.search(r"warm-up: (.*)", text)
+    compiled = re.search(r"cached kernels compiled during the tests: (\d+) \(([^)]+)\)", text)
     if done.returncode != 0:
         sys.exit(f"{' '.join(command)} failed in {cwd}:\n{text[-3000:]}")
     return {"wall_s": wall,
@@ -49,6 +57,10 @@ def timed(command: list[str], cwd: Path) -> dict:
             "tests_passed": int(tests.group(1)) if tests else None,
             "pytest_s": float(tests.group(2)) if tests else None,
             "warmup": warmup.group(1).strip() if warmup else None,
+            # what the warm-up left to the tests: each kernel with the test that compiled it
+            "compiled_during_tests": (Path(compiled.group(2)).read_text().splitlines()
+                                      if compiled and Path(compiled.group(2)).is_file()
+                                      else []),
             "load_before": load_before, "load_after": load()}
 
 
@@ -58,11 +70,50 @@ def fresh_clone(folder: Path) -> Path:
     return target
 
 
+#: tests that start many `sweep` processes, cheap to compile: the default of --against
+AGAINST_TESTS = ("tests/test_hostile_inputs.py", "tests/test_spec_cli.py",
+                 "tests/test_docs.py::test_the_tutorial_runs_as_written")
+
+
+def against(tree: Path, tests: list[str], rounds: int, label: str) -> None:
+    """Warm runs of ``tests`` here and in ``tree``, interleaved after one run each that
+    fills the caches; medians of the children's CPU seconds."""
+    command = [sys.executable, "-m", "pytest", "-q", "--no-warmup", "-p", "no:cacheprovider",
+               "-m", "not slow", *tests]
+    with tempfile.TemporaryDirectory() as cache:
+        trees = {"this": (ROOT, None),
+                 "other": (tree, dict(os.environ, NUMBA_CACHE_DIR=cache,
+                                      PYTHONPATH=str(tree)))}
+        for cwd, env in trees.values():
+            timed(command, cwd, env)
+        runs = {name: [] for name in trees}
+        for _ in range(rounds):
+            for name, (cwd, env) in trees.items():
+                runs[name].append(timed(command, cwd, env))
+                print(name, f"{runs[name][-1]['cpu_s']:.1f} CPU s", flush=True)
+    this, other = (statistics.median(r["cpu_s"] for r in runs[n]) for n in ("this", "other"))
+    results = {"machine": platform.node(), "cores": os.cpu_count(),
+               "measured": time.strftime("%Y-%m-%d"), "against": str(tree),
+               "tests": tests, "rounds": rounds, "median_this_cpu_s": this,
+               "median_other_cpu_s": other, "ratio_other_over_this": other / this,
+               "runs": runs}
+    path = HERE / "results" / ("test_loop_against" + (f"_{label}" if label else "") + ".json")
+    path.write_text(json.dumps(results, indent=1) + "\n")
+    print(f"this {this:.1f} CPU s, other {other:.1f} CPU s, other/this {other / this:.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--skip-full", action="store_true",
                         help="measure the fast loop only")
+    parser.add_argument("--against", type=Path, help="another checkout's tree")
+    parser.add_argument("--label", default="")
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("tests", nargs="*", default=list(AGAINST_TESTS))
     args = parser.parse_args()
+    if args.against:
+        against(args.against.resolve(), args.tests, args.rounds, args.label)
+        return
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
                           capture_output=True, text=True).stdout.strip()
     results = {"machine": platform.node(), "cores": os.cpu_count(), "commit": head,

@@ -35,16 +35,17 @@ def pytest_sessionstart(session):
 class _CachedCompiles(numba_event.Listener):
     """numba's compile events of cached functions in this process: what the warm-up left
     to the tests (each worker reports its list; a kernel compiled on two workers was
-    compiled twice)."""
+    compiled twice), each with the test that compiled it."""
 
     def __init__(self):
-        self.names, self.depth = set(), 0
+        self.names, self.depth, self.test = {}, 0, "collection"
 
     def on_start(self, e):
         self.depth += 1
         d = e.data["dispatcher"]
         if self.depth == 1 and d._cache.__class__.__name__ != "NullCache":
-            self.names.add(f"{d.py_func.__module__}.{d.py_func.__qualname__}")
+            self.names.setdefault(f"{d.py_func.__module__}.{d.py_func.__qualname__}",
+                                  self.test)
 
     def on_end(self, e):
         self.depth -= 1
@@ -54,16 +55,21 @@ _COMPILES = _CachedCompiles()
 numba_event.register("numba:compile", _COMPILES)
 
 
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    _COMPILES.test = item.nodeid
+
+
 def pytest_sessionfinish(session):
     workeroutput = getattr(session.config, "workeroutput", None)
     if workeroutput is not None:
-        workeroutput["cached_compiles"] = sorted(_COMPILES.names)
+        workeroutput["cached_compiles"] = sorted(_COMPILES.names.items())
 
 
 def pytest_testnodedown(node, error):
     seen = node.config.stash.setdefault(_COMPILED_BY, {})
-    for name in getattr(node, "workeroutput", {}).get("cached_compiles", []):
-        seen.setdefault(name, []).append(node.gateway.id)
+    for name, test in getattr(node, "workeroutput", {}).get("cached_compiles", []):
+        seen.setdefault(name, []).append(f"{node.gateway.id} {test}")
 
 
 _COMPILED_BY = pytest.StashKey[dict]()
@@ -72,11 +78,16 @@ _COMPILED_BY = pytest.StashKey[dict]()
 def pytest_terminal_summary(terminalreporter, config):
     by_worker = config.stash.get(_COMPILED_BY, None)
     if by_worker is None:  # one process: its own list
-        by_worker = {name: ["main"] for name in _COMPILES.names}
+        by_worker = {name: [f"main {test}"] for name, test in _COMPILES.names.items()}
     twice = sorted(name for name, workers in by_worker.items() if len(workers) > 1)
     if by_worker:
+        from kernels.cache import cache_dir
+
+        listing = cache_dir() / "compiled-during-tests.txt"
+        listing.write_text("".join(f"{name}\t{'; '.join(workers)}\n"
+                                   for name, workers in sorted(by_worker.items())))
         terminalreporter.write_line(
-            f"cached kernels compiled during the tests: {len(by_worker)}"
+            f"cached kernels compiled during the tests: {len(by_worker)} ({listing})"
             + (f"; on more than one worker (add them to tests/warmup.py): {', '.join(twice)}"
                if twice else ""))
 
