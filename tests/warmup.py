@@ -98,15 +98,29 @@ FAST_ENTRY_POINTS = (
     ("rigid", "rotor_stop", "dopri5", False, False, 1),
     ("paper", "lab_window", "dopri5", False, True, 1),
     ("rotor", "rotor_stop", "dopri5", False, True, 1),
+    # the fast tests of several starts and of a method compiled in (the tests' listing of
+    # what they compiled themselves named these: tests/conftest.py)
+    ("rotor", "lab_window", "dopri5", True, False, 8),
+    ("rotor", "lab_window", "dopri5", False, True, 8),
+    ("paper", "rotor_stop", "dopri5", False, False, 8),
+    ("rigid", "rotor_stop", "dopri5", False, False, 8),
+    ("paper", "rotor_stop", "dop853", False, False, 1),
 )
 #: those the slow tests add
 SLOW_ENTRY_POINTS = (
     ("rotor", "lab_window", "dop853", True, False, 1),
     ("rotor", "rotor_stop", "dop853", True, False, 1),
     ("rotor", "lab_window", "dop853", False, False, 1),
-    ("paper", "rotor_stop", "dop853", False, False, 1),
     ("rigid", "rotor_stop", "dop853", False, False, 1),
     ("rotor", "rotor_stop", "dop853", False, True, 1),
+    ("rotor", "lab_window", "dopri5", True, False, 1),
+    ("rotor", "rotor_stop", "dopri5", True, False, 1),
+    ("rotor", "rotor_stop", "dopri5", True, True, 1),
+    ("paper", "lab_window", "dopri5", True, True, 1),
+    ("rigid", "lab_window", "dopri5", True, True, 1),
+    ("rigid", "lab_window", "dopri5", False, False, 8),
+    ("paper", "lab_window", "dop853", False, True, 1),
+    ("rotor", "lab_window", "dop853", False, True, 1),
 )
 
 
