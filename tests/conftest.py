@@ -84,6 +84,7 @@ def pytest_terminal_summary(terminalreporter, config):
         from kernels.cache import cache_dir
 
         listing = cache_dir() / "compiled-during-tests.txt"
+        listing.parent.mkdir(parents=True, exist_ok=True)
         listing.write_text("".join(f"{name}\t{'; '.join(workers)}\n"
                                    for name, workers in sorted(by_worker.items())))
         terminalreporter.write_line(
