@@ -29,28 +29,9 @@ NEUTRAL_HALF_SWING, NEUTRAL_MEAN = 0, 1
 SI_OUTPUTS = ("spring_stiffness", "shaft_stiffness", "moment_peak_free",
               "moment_peak_balanced")
 
-#: the short label a chart shows of each parameter and output (Quantity.label)
-LABELS = {
-    "lambda0": r"base ratio $\lambda_0$", "lambda2": r"coupler ratio $\lambda_2$",
-    "lambda3": r"rocker ratio $\lambda_3$", "sigma": r"branch $\sigma$",
-    "f": "speed coefficient $f$", "r": "stiffness ratio $r$", "eta": r"damping $\eta$",
-    "driven_inertia": "driven inertia $I_m$", "crank_speed": r"crank speed $\omega$",
-    "spring_neutral": "spring neutral", "swing": r"rocker swing $\gamma_0$",
-    "moment_invariant_peak_free": r"moment invariant $M_{i,\max}$ (free)",
-    "moment_invariant_peak_balanced": r"moment invariant $M_{zr,\max}$ (balanced)",
-    "balancing_coefficient": "balancing coefficient $K$",
-    "dynamic_coefficient_free": "dynamic coefficient $K_d$ free",
-    "dynamic_coefficient_balanced": "dynamic coefficient $K_d$ balanced",
-    "acceleration_invariant_rigid": "peak acceleration (rigid)",
-    "harmonics_used": "harmonics", "truncation_error": "truncation error",
-    "resonance_margin": "resonance margin", "spring_stiffness": "spring stiffness $c_{sp}$",
-    "shaft_stiffness": "shaft stiffness $c$", "moment_peak_free": r"peak moment $M_\max$ free",
-    "moment_peak_balanced": r"peak moment $M_{zr,\max}$ balanced",
-}
 
 
 DECLARATION = Mechanism(
-    labels=LABELS,
     name="spring_balancer",
     title="Leaf-spring balancer on a four-bar: steady state by Fourier series",
     summary="rocker motion from the loop closure, Fourier coefficients by rFFT once per "
@@ -62,56 +43,66 @@ DECLARATION = Mechanism(
                "received gives neither journal nor year",
     parameters=(
         Quantity("lambda0", "1", "base ratio l0/l1 (lambda0)", "λ0", default=3.0,
-                 **POSITIVE),
+                 **POSITIVE, label=r"base ratio $\lambda_0$"),
         Quantity("lambda2", "1", "coupler ratio l2/l1 (lambda2)", "λ2", default=3.5,
-                 **POSITIVE),
+                 **POSITIVE, label=r"coupler ratio $\lambda_2$"),
         Quantity("lambda3", "1", "rocker ratio l3/l1 (lambda3)", "λ3", default=2.5,
-                 **POSITIVE),
+                 **POSITIVE, label=r"rocker ratio $\lambda_3$"),
         Quantity("sigma", "1", "assembly branch (sigma)", "σ", default=1,
-                 choices={1: 1, -1: -1}),
+                 choices={1: 1, -1: -1}, label=r"branch $\sigma$"),
         Quantity("f", "1", "speed-change coefficient f = omega/omega0", "f", default=1.0,
-                 **POSITIVE),
+                 **POSITIVE, label="speed coefficient $f$"),
         Quantity("r", "1", "stiffness ratio r = omega0/p (the paper's omega0/p)", "r",
-                 default=1.0, **POSITIVE),
+                 default=1.0, **POSITIVE, label="stiffness ratio $r$"),
         Quantity("eta", "1", "dimensionless damping eta = nu/omega0", "η", default=0.02,
-                 minimum=0.0, maximum=10.0),
+                 minimum=0.0, maximum=10.0, label=r"damping $\eta$"),
         Quantity("driven_inertia", "kg m2", "moment of inertia of the driven mass on the "
-                 "rocker's shaft (I_m), for the outputs in SI", "I_m", **POSITIVE),
+                 "rocker's shaft (I_m), for the outputs in SI", "I_m", **POSITIVE,
+                 label="driven inertia $I_m$"),
         Quantity("crank_speed", "rad s-1", "crank speed omega (the operating speed: omega0 = "
-                 "omega/f), for the outputs in SI", "ω", **POSITIVE),
+                 "omega/f), for the outputs in SI", "ω", **POSITIVE,
+                 label=r"crank speed $\omega$"),
         Quantity("spring_neutral", "1", "neutral angle of the spring: half the swing (the "
                  "paper) or the rocker's mean angle (no static moment)",
                  default="half_swing",
-                 choices={"half_swing": NEUTRAL_HALF_SWING, "mean": NEUTRAL_MEAN}),
+                 choices={"half_swing": NEUTRAL_HALF_SWING, "mean": NEUTRAL_MEAN},
+                 label="spring neutral"),
     ),
     outputs=(
-        Output("swing", "rad", "rocker swing (gamma0)", "γ0"),
+        Output("swing", "rad", "rocker swing (gamma0)", "γ0", label=r"rocker swing $\gamma_0$"),
         Output("moment_invariant_peak_free", "rad", "peak unbalanced-moment invariant "
                "without the balancer (M_i,max = max |gamma - g|)", "M_i,max",
-               "moment = c M_i = I_m omega0^2 M_i/r^2"),
+               "moment = c M_i = I_m omega0^2 M_i/r^2",
+               label=r"moment invariant $M_{i,\max}$ (free)"),
         Output("moment_invariant_peak_balanced", "rad", "peak unbalanced-moment invariant "
-               "with the balancer (M_zr,max)", "M_zr,max"),
+               "with the balancer (M_zr,max)", "M_zr,max",
+               label=r"moment invariant $M_{zr,\max}$ (balanced)"),
         Output("balancing_coefficient", "1", "balancing coefficient K = M_i,max / M_zr,max",
-               "K", marks=((1.0, "K = 1: the balancer stops helping"),)),
+               "K", marks=((1.0, "K = 1: the balancer stops helping"),),
+               label="balancing coefficient $K$"),
         Output("dynamic_coefficient_free", "1", "dynamic coefficient without the balancer "
-               "(K_d)", "K_d"),
+               "(K_d)", "K_d", label="dynamic coefficient $K_d$ free"),
         Output("dynamic_coefficient_balanced", "1", "dynamic coefficient with the balancer "
-               "(K_d,zr)", "K_d,zr"),
+               "(K_d,zr)", "K_d,zr", label="dynamic coefficient $K_d$ balanced"),
         Output("acceleration_invariant_rigid", "1", "peak rocker acceleration invariant "
-               "max |d2 gamma/d theta2| (rigid shaft)"),
+               "max |d2 gamma/d theta2| (rigid shaft)", label="peak acceleration (rigid)"),
         Output("harmonics_used", "1", "harmonics of the rocker motion used",
-               diagnostic=True, count=True),
+               diagnostic=True, count=True, label="harmonics"),
         Output("truncation_error", "1", "estimated relative truncation error of the "
-               "acceleration metrics", diagnostic=True),
-        Output("resonance_margin", "1", "distance to the nearest resonance, min |D_n|/K"),
+               "acceleration metrics", diagnostic=True, label="truncation error"),
+        Output("resonance_margin", "1", "distance to the nearest resonance, min |D_n|/K",
+               label="resonance margin"),
         Output("spring_stiffness", "N m rad-1", "the balancer spring's torsional stiffness "
-               "c_sp = I_m omega0^2, omega0 = omega/f", "c_sp", on_request=True),
+               "c_sp = I_m omega0^2, omega0 = omega/f", "c_sp", on_request=True,
+               label="spring stiffness $c_{sp}$"),
         Output("shaft_stiffness", "N m rad-1", "the driven shaft's torsional stiffness "
-               "c = I_m p^2 = c_sp / r^2", "c", on_request=True),
+               "c = I_m p^2 = c_sp / r^2", "c", on_request=True, label="shaft stiffness $c$"),
         Output("moment_peak_free", "N m", "peak unbalanced moment without the balancer, "
-               "c times its invariant", "M_max", on_request=True),
+               "c times its invariant", "M_max", on_request=True,
+               label=r"peak moment $M_\max$ free"),
         Output("moment_peak_balanced", "N m", "peak unbalanced moment with the balancer, "
-               "c times its invariant", "M_zr,max", on_request=True),
+               "c times its invariant", "M_zr,max", on_request=True,
+               label=r"peak moment $M_{zr,\max}$ balanced"),
     ),
     rules=lambda given: (
         "driven_inertia: the outputs in SI need driven_inertia and crank_speed"

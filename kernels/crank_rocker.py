@@ -70,30 +70,9 @@ def _rules(given: dict) -> str | None:
     return None
 
 
-#: the short label a chart shows of each parameter and output (Quantity.label)
-LABELS = {
-    "type": "type", "R": "restitution $R$", "largest_link": "largest link ratio",
-    "lambda0": r"base ratio $\lambda_0$", "lambda2": r"rod ratio $\lambda_2$",
-    "lambda3": r"rocker ratio $\lambda_3$", "base_root": "base root",
-    "crank_length": "crank $l_1$", "envelope": "envelope $L$", "omega1": r"crank speed $\omega_1$",
-    "impact_speed_limit": "impact speed limit", "sigma": r"branch $\sigma$",
-    "transfer_ratio": r"transfer ratio $u_{31}$", "rocker_angle": r"rocker angle $\varphi_3$",
-    "crank_angle": r"crank angle $\varphi_1$",
-    "rocker_inertia": "rocker inertia $J_{D3}$", "gamma": r"node parameter $\gamma$",
-    "restitution_kinematic": "kinematic restitution $R_k$",
-    "transfer_before": r"$u_{31}$ before the node", "transfer_after": r"$u_{31}$ after the node",
-    "impact_transfer_ratio": r"$|u_{31}|$ at impact", "impact_speed": "impact speed $v$",
-    "crank_turns_fully": "crank turns fully",
-    "transmission_angle_working": r"working transmission angle $\mu$",
-    "transmission_angle_opposite": r"transmission angle opposite $\mu$",
-    "assembly_branch": r"branch $\sigma$", "special_crank_angle": r"node angle $\varphi_1^*$",
-    "blow_energy": "blow energy $E$", "blow_rate": "blow rate",
-    "special_position_count": "special positions", "restitution_kinematic_max": r"largest $|R_k|$",
-}
 
 
 DECLARATION = Mechanism(
-    labels=LABELS,
     name="crank_rocker",
     title="Crank-rocker impact four-bar: synthesis and kinematic restitution",
     summary="closed form: synthesis (the paper's eqs. 10-11; the type-b quadratic derived "
@@ -106,96 +85,109 @@ DECLARATION = Mechanism(
     parameters=(
         Quantity("type", "1", "impact four-bar type (a: largest rod, b: largest rocker, "
                  "c: largest base, general: any four-bar)", default="a",
-                 choices={"a": TYPE_A, "b": TYPE_B, "c": TYPE_C, "general": TYPE_GENERAL}),
+                 choices={"a": TYPE_A, "b": TYPE_B, "c": TYPE_C, "general": TYPE_GENERAL},
+                 label="type"),
         Quantity("R", "1", "physical restitution coefficient of the striker (R); synthesis "
                  "makes Rk = -R", symbol="R", default=0.3, minimum=0.0, maximum=1.0,
-                 min_inclusive=False, max_inclusive=False, used_when={"type": TYPES}),
+                 min_inclusive=False, max_inclusive=False, used_when={"type": TYPES},
+                 label="restitution $R$"),
         Quantity("largest_link", "1", "largest link ratio of the type (lambda2 for a, "
-                 "lambda3 for b, lambda0 for c)", used_when={"type": TYPES}, **POSITIVE),
+                 "lambda3 for b, lambda0 for c)", used_when={"type": TYPES}, **POSITIVE,
+                 label="largest link ratio"),
         Quantity("lambda0", "1", "base ratio l0/l1 (lambda0); type b: given instead of "
                  "lambda3; type c: its largest link", symbol="λ0",
-                 used_when={"type": ("b", "c", "general")}, **POSITIVE),
+                 used_when={"type": ("b", "c", "general")}, **POSITIVE,
+                 label=r"base ratio $\lambda_0$"),
         Quantity("lambda2", "1", "connecting rod ratio l2/l1 (lambda2); type a: its "
                  "largest link", symbol="λ2", used_when={"type": ("a", "general")},
-                 **POSITIVE),
+                 **POSITIVE, label=r"rod ratio $\lambda_2$"),
         Quantity("lambda3", "1", "rocker ratio l3/l1 (lambda3); type b: its largest link",
-                 symbol="λ3", used_when={"type": ("b", "general")}, **POSITIVE),
+                 symbol="λ3", used_when={"type": ("b", "general")}, **POSITIVE,
+                 label=r"rocker ratio $\lambda_3$"),
         Quantity("base_root", "1", "type b given lambda3: which root of the synthesis "
                  "quadratic is the base", default="smaller",
                  choices={"smaller": ROOT_SMALLER_BASE, "larger": ROOT_LARGER_BASE},
-                 used_when={"type": ("b",)}),
+                 used_when={"type": ("b",)}, label="base root"),
         Quantity("crank_length", "m", "crank length (l1); or give envelope", symbol="l1",
-                 default=0.1, **POSITIVE),
+                 default=0.1, **POSITIVE, label="crank $l_1$"),
         Quantity("envelope", "m", "overall size: the length of the largest link (the "
                  "linkage's size is mostly its largest link, [CR]); given instead of "
                  "crank_length, the crank length is derived from it",
-                 replaces="crank_length", **POSITIVE),
+                 replaces="crank_length", **POSITIVE, label="envelope $L$"),
         Quantity("omega1", "rad s-1", "crank angular velocity (omega1); its sign is the "
                  "rotation direction; or give impact_speed_limit", symbol="ω1", default=30.0,
-                 nonzero=True),
+                 nonzero=True, label=r"crank speed $\omega_1$"),
         Quantity("impact_speed_limit", "m s-1", "the rocker tip's speed limit at impact "
                  "([CR]: 10 m/s); given instead of omega1, the crank turns as fast as keeps "
-                 "the blow at it (positive rotation)", replaces="omega1", **POSITIVE),
+                 "the blow at it (positive rotation)", replaces="omega1", **POSITIVE,
+                 label="impact speed limit"),
         assembly_branch(),
         Quantity("rocker_inertia", "kg m2", "moment of inertia of the rocker and striker "
                  "about the rocker pivot D (J_D3), for the energy per blow", "J_D3",
-                 **POSITIVE),
+                 **POSITIVE, label="rocker inertia $J_{D3}$"),
     ),
     outputs=(
-        Output("lambda0", "1", "base ratio l0/l1 (lambda0)", "λ0", echoes="lambda0"),
-        Output("lambda2", "1", "connecting rod ratio l2/l1 (lambda2)", "λ2", echoes="lambda2"),
-        Output("lambda3", "1", "rocker ratio l3/l1 (lambda3)", "λ3", echoes="lambda3"),
+        Output("lambda0", "1", "base ratio l0/l1 (lambda0)", "λ0", echoes="lambda0",
+               label=r"base ratio $\lambda_0$"),
+        Output("lambda2", "1", "connecting rod ratio l2/l1 (lambda2)", "λ2", echoes="lambda2",
+               label=r"rod ratio $\lambda_2$"),
+        Output("lambda3", "1", "rocker ratio l3/l1 (lambda3)", "λ3", echoes="lambda3",
+               label=r"rocker ratio $\lambda_3$"),
         Output("gamma", "1", "node parameter sqrt(lambda0 lambda2 / lambda3) (gamma)", "γ",
-               everywhere=True),
+               everywhere=True, label=r"node parameter $\gamma$"),
         Output("restitution_kinematic", "1", "kinematic restitution coefficient (Rk)", "Rk",
                "u31 after / u31 before the special position; negative for an impact "
-               "mechanism"),
+               "mechanism", label="kinematic restitution $R_k$"),
         Output("transfer_before", "1", "rocker transfer ratio approaching the special "
-               "position (u31 at impact)", "u31(φ1*−0)"),
+               "position (u31 at impact)", "u31(φ1*−0)", label="$u_{31}$ before the node"),
         Output("transfer_after", "1", "rocker transfer ratio leaving the special position",
-               "u31(φ1*+0)"),
+               "u31(φ1*+0)", label="$u_{31}$ after the node"),
         Output("impact_transfer_ratio", "1", "magnitude of the transfer ratio at impact "
-               "(|u31(2 pi)| of the paper's tables)", "|u31(2π)|"),
+               "(|u31(2 pi)| of the paper's tables)", "|u31(2π)|", label="$|u_{31}|$ at impact"),
         Output("impact_speed", "m s-1", "rocker tip speed at impact "
-               "(|u31| |omega1| lambda3 l1)"),
+               "(|u31| |omega1| lambda3 l1)", label="impact speed $v$"),
         Output("crank_turns_fully", "1", "whether the crank can turn fully",
                flags={"undetermined": -1, "no": 0, "yes": 1}, undetermined="undetermined",
-               everywhere=True),
+               everywhere=True, label="crank turns fully"),
         Output("transmission_angle_working", "rad", "smallest transmission angle over the "
                "working stroke: the crank turn outside method.working_window around the "
                "special position, the dead centre opposite it included", "μ_work",
                "at the special position itself every change-point four-bar is collinear "
                "(mu = 0); the window leaves out the impact's neighbourhood, where the rocker "
-               "is stopped by the tool anyway"),
+               "is stopped by the tool anyway", label=r"working transmission angle $\mu$"),
         Output("transmission_angle_opposite", "rad", "transmission angle at the dead "
                "centre opposite the special position", "μ", "the design-relevant "
                "transmission angle of an impact four-bar (its minimum is 0 at the impact by "
-               "construction)"),
+               "construction)", label=r"transmission angle opposite $\mu$"),
         Output("assembly_branch", "1", "assembly branch used (sigma)", "σ",
-               flags=BRANCH_FLAGS, undetermined="undetermined"),
+               flags=BRANCH_FLAGS, undetermined="undetermined", label=r"branch $\sigma$"),
         Output("special_crank_angle", "rad", "crank angle of the impact special position "
-               "(phi1*)", "φ1*", everywhere=True),
+               "(phi1*)", "φ1*", everywhere=True, label=r"node angle $\varphi_1^*$"),
         Output("envelope", "m", "overall size: the length of the largest link", "L_max",
-               echoes="envelope"),
+               echoes="envelope", label="envelope $L$"),
         Output("crank_length", "m", "crank length (l1), given or derived from envelope",
-               "l1", echoes="crank_length"),
+               "l1", echoes="crank_length", label="crank $l_1$"),
         Output("omega1", "rad s-1", "crank angular velocity, given or derived from "
-               "impact_speed_limit", "ω1", echoes="omega1"),
+               "impact_speed_limit", "ω1", echoes="omega1", label=r"crank speed $\omega_1$"),
         Output("blow_energy", "J", "energy per blow: the rocker's kinetic energy at impact, "
                "J_D3 (u31 omega1)^2 / 2, at the crank speed omega1 (given, or derived from "
-               "impact_speed_limit; the machine's own speed and its loss: impact_machine)", "E_striker", on_request=True),
+               "impact_speed_limit; the machine's own speed and its loss: impact_machine)",
+               "E_striker", on_request=True, label="blow energy $E$"),
         Output("blow_rate", "min-1", "blows per minute at the crank speed omega1 (one a "
-               "crank turn)", on_request=True),
+               "crank turn)", on_request=True, label="blow rate"),
         Output("special_position_count", "1", "number of special positions per crank "
-               "turn", diagnostic=True, count=True),
+               "turn", diagnostic=True, count=True, label="special positions"),
         Output("restitution_kinematic_max", "1", "largest |Rk| reachable with this rocker "
-               "ratio (type b only)", everywhere=True),
+               "ratio (type b only)", everywhere=True, label="largest $|R_k|$"),
     ),
     profiles=(Output("transfer_ratio", "1", "rocker transfer ratio u31 = dphi3/dphi1 on the "
-                     "assembly branch (NaN where the loop cannot close)", "u31"),
+                     "assembly branch (NaN where the loop cannot close)", "u31",
+                     label="transfer ratio $u_{31}$"),
               Output("rocker_angle", "rad", "rocker angle (phi3), from the direction A->D, "
-                     "counted within pi of its angle at the special position", "φ3")),
-    profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1), from A->D", "φ1"),
+                     "counted within pi of its angle at the special position", "φ3",
+                     label=r"rocker angle $\varphi_3$")),
+    profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1), from A->D", "φ1",
+                         label=r"crank angle $\varphi_1$"),
     profile_coordinate=lambda method: cell_midpoints(method.profile_points,
                                                      cycle_turns(method) * 2.0 * np.pi),
     status=("ok", "not_assemblable", "no_real_synthesis", "wrong_branch", "nonfinite",

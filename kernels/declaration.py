@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections import namedtuple
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Callable
 
@@ -55,9 +55,8 @@ class Quantity:
     #: another parameter this one is given instead of (envelope for crank_length): where
     #: this one is given, the other's default is not used (its code is NaN, not recorded)
     replaces: str | None = None
-    #: the short label a chart shows beside the units: a symbol and a few words, in
-    #: matplotlib's mathtext (``r"crank speed $\omega_1$"``); declared in the mechanism's
-    #: ``labels``
+    #: the short label a chart shows beside the units, never the long_name: a symbol and a
+    #: few words, in matplotlib's mathtext (``r"crank speed $\omega_1$"``)
     label: str = ""
     #: each value of this categorical quantity runs code of its own (an entry point
     #: compiled apart): a first run compiles the values on a grid in parallel processes
@@ -189,18 +188,8 @@ class Mechanism:
     whole_axes: tuple[str, ...] = ()
     rules: Callable[[dict], str | None] | None = None
     boundaries: tuple[Boundary, ...] = ()
-    #: the short label of each parameter, output and profile, and of the profile
-    #: dimension, by name (Quantity.label): what a chart shows, never the long_name
-    labels: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        def labelled(items):
-            return tuple(replace(q, label=self.labels.get(q.name, q.label)) for q in items)
-
-        for kind in ("parameters", "outputs", "profiles"):
-            object.__setattr__(self, kind, labelled(getattr(self, kind)))
-        if self.profile_dim is not None:
-            object.__setattr__(self, "profile_dim", labelled((self.profile_dim,))[0])
         for kind, items in (("parameter", self.parameters), ("output", self.outputs),
                             ("profile", self.profiles), ("method key", self.method)):
             names = [q.name for q in items]
@@ -329,7 +318,7 @@ BRANCH_FLAGS = {"minus": -1, "undetermined": 0, "plus": 1}
 def assembly_branch() -> Quantity:
     """sigma: +1, -1 or the branch that makes the special position an impact."""
     return Quantity("sigma", "1", "assembly branch (sigma): +1, -1, or the impact branch",
-                    symbol="σ", default="impact",
+                    symbol="σ", default="impact", label=r"branch $\sigma$",
                     choices={"impact": SIGMA_IMPACT, 1: 1, -1: -1})
 
 

@@ -55,18 +55,19 @@ _WINDOWED = "outside |phi1 - phi1*| < special_window at a special position"
 
 def reaction_profiles(joints, magnitude: bool = False) -> tuple:
     """The profiles of joint reactions, each resolved along and across a link: for each
-    (force, what acts on what, the link), its normal (along) and tangential (across)
+    (joint, force, what acts on what, the link), its normal (along) and tangential (across)
     components, ``F21_n`` and ``F21_t``; with ``magnitude``, then each one's magnitude,
     ``F21``."""
     resolved = tuple(Output(f"{force}_{c}", "N", f"{what} {side} the {link} ({force} {part})",
-                            f"{force}^{mark}")
-                     for force, what, link in joints
+                            f"{force}^{mark}", label=rf"$F_{{{force[1:]}}}$ {side} {link}")
+                     for _, force, what, link in joints
                      for c, side, part, mark in (("n", "along", "normal", "n"),
                                                  ("t", "across", "tangential", "τ")))
     if not magnitude:
         return resolved
-    return resolved + tuple(Output(force, "N", f"{what}, magnitude (|{force}|)", f"|{force}|")
-                            for force, what, link in joints)
+    return resolved + tuple(Output(force, "N", f"{what}, magnitude (|{force}|)", f"|{force}|",
+                                   label=rf"$|F_{{{force[1:]}}}|$ at {joint}")
+                            for joint, force, what, link in joints)
 
 
 def _rules(given: dict) -> str | None:
@@ -83,37 +84,9 @@ def _rules(given: dict) -> str | None:
     return None
 
 
-#: the short label a chart shows of each parameter, output and profile (Quantity.label)
-LABELS = {
-    "l0": "base $l_0$", "l1": "crank $l_1$", "l2": "coupler $l_2$", "l3": "rocker $l_3$",
-    "m1": "crank mass $m_1$", "m2": "coupler mass $m_2$", "m3": "rocker mass $m_3$",
-    "s1": "crank centroid $s_1$", "s2": "coupler centroid $s_2$", "s3": "rocker centroid $s_3$",
-    "q1": "crank offset $q_1$", "q2": "coupler offset $q_2$", "q3": "rocker offset $q_3$",
-    "J1": "crank inertia $I_{S1}$", "J2": "coupler inertia $I_{S2}$",
-    "J3": "rocker inertia $I_{S3}$", "omega1": r"crank speed $\omega_1$",
-    "epsilon1": r"crank acceleration $\varepsilon_1$", "tilt": r"tilt $\theta$",
-    "g": "gravity $g$", "sigma": r"branch $\sigma$", "external_force": "load across rocker",
-    "external_force_normal": "load along rocker", "external_force_arm": "load arm",
-    "external_moment": "load couple", "base_motion": "base motion",
-    "base_omega": r"base speed $\Omega_b$", "base_epsilon": "base acceleration $E_b$",
-    "base_amplitude": "base swing $A_b$", "base_frequency_ratio": r"base frequency $\nu$",
-    "base_phase": r"base phase $\varphi_b$", "crank_pivot_x": "crank pivot $x_A$",
-    "crank_pivot_y": "crank pivot $y_A$",
-    "force_peak_A": r"peak $|F_{14}|$ at A", "force_peak_B": r"peak $|F_{21}|$ at B",
-    "force_peak_C": r"peak $|F_{32}|$ at C", "force_peak_D": r"peak $|F_{34}|$ at D",
-    "balancing_moment_peak": r"peak $|M_b|$", "balancing_moment_rms": r"RMS $M_b$",
-    "cycle_work": "cycle work", "special_crank_angle": r"node angle $\varphi_1^*$",
-    "assembly_branch": r"branch $\sigma$",
-    "F21_n": r"$F_{21}$ along coupler", "F21_t": r"$F_{21}$ across coupler",
-    "F34_n": r"$F_{34}$ along rocker", "F34_t": r"$F_{34}$ across rocker",
-    "F32_n": r"$F_{32}$ along rocker", "F32_t": r"$F_{32}$ across rocker",
-    "F14_n": r"$F_{14}$ along crank", "F14_t": r"$F_{14}$ across crank",
-    "balancing_moment": "balancing moment $M_b$", "crank_angle": r"crank angle $\varphi_1$",
-}
 
 
 DECLARATION = Mechanism(
-    labels=LABELS,
     name="linkage_forces",
     title="Kinetostatics of the impact four-bar and GUIM-1's additional rocker",
     summary="Assur-dyad vector route for the reactions, balancing moment by virtual work, "
@@ -124,98 +97,115 @@ DECLARATION = Mechanism(
                "arm (in Russian), Vestnik of Issyk-Kul State University no. 50, 2021; the "
                "copy received does not name the authors",
     parameters=(
-        Quantity("l0", "m", "base length AD (l0)", "l0", default=_L0, **POSITIVE),
-        Quantity("l1", "m", "crank length AB (l1)", "l1", default=_L1, **POSITIVE),
-        Quantity("l2", "m", "coupler length BC (l2)", "l2", default=_L2, **POSITIVE),
-        Quantity("l3", "m", "rocker length DC (l3)", "l3", default=_L3, **POSITIVE),
-        Quantity("m1", "kg", "crank mass (m1)", "m1", default=2.0, **_NONNEG),
-        Quantity("m2", "kg", "coupler mass (m2)", "m2", default=3.0, **_NONNEG),
-        Quantity("m3", "kg", "rocker mass (m3)", "m3", default=8.0, **_NONNEG),
-        Quantity("s1", "1", "crank centroid along AB, fraction of l1 from A", default=0.5),
+        Quantity("l0", "m", "base length AD (l0)", "l0", default=_L0, **POSITIVE,
+                 label="base $l_0$"),
+        Quantity("l1", "m", "crank length AB (l1)", "l1", default=_L1, **POSITIVE,
+                 label="crank $l_1$"),
+        Quantity("l2", "m", "coupler length BC (l2)", "l2", default=_L2, **POSITIVE,
+                 label="coupler $l_2$"),
+        Quantity("l3", "m", "rocker length DC (l3)", "l3", default=_L3, **POSITIVE,
+                 label="rocker $l_3$"),
+        Quantity("m1", "kg", "crank mass (m1)", "m1", default=2.0, **_NONNEG,
+                 label="crank mass $m_1$"),
+        Quantity("m2", "kg", "coupler mass (m2)", "m2", default=3.0, **_NONNEG,
+                 label="coupler mass $m_2$"),
+        Quantity("m3", "kg", "rocker mass (m3)", "m3", default=8.0, **_NONNEG,
+                 label="rocker mass $m_3$"),
+        Quantity("s1", "1", "crank centroid along AB, fraction of l1 from A", default=0.5,
+                 label="crank centroid $s_1$"),
         Quantity("s2", "1", "coupler centroid along BC, fraction of l2 from B",
-                 default=0.48),
+                 default=0.48, label="coupler centroid $s_2$"),
         Quantity("s3", "1", "rocker centroid along DC, fraction of l3 from D",
-                 default=0.11 / _L3),
-        Quantity("q1", "m", "crank centroid offset across the link", default=0.01),
-        Quantity("q2", "m", "coupler centroid offset across the link", default=-0.02),
-        Quantity("q3", "m", "rocker centroid offset across the link", default=0.015),
+                 default=0.11 / _L3, label="rocker centroid $s_3$"),
+        Quantity("q1", "m", "crank centroid offset across the link", default=0.01,
+                 label="crank offset $q_1$"),
+        Quantity("q2", "m", "coupler centroid offset across the link", default=-0.02,
+                 label="coupler offset $q_2$"),
+        Quantity("q3", "m", "rocker centroid offset across the link", default=0.015,
+                 label="rocker offset $q_3$"),
         Quantity("J1", "kg m2", "crank centroidal moment of inertia (I_S1)", "I_S1",
-                 default=2 * 0.1**2 / 12 + 0.001, **_NONNEG),
+                 default=2 * 0.1**2 / 12 + 0.001, **_NONNEG, label="crank inertia $I_{S1}$"),
         Quantity("J2", "kg m2", "coupler centroidal moment of inertia (I_S2)", "I_S2",
-                 default=3 * 0.25**2 / 12, **_NONNEG),
+                 default=3 * 0.25**2 / 12, **_NONNEG, label="coupler inertia $I_{S2}$"),
         Quantity("J3", "kg m2", "rocker centroidal moment of inertia (I_S3)", "I_S3",
-                 default=8 * 0.15**2 / 12 + 0.02, **_NONNEG),
+                 default=8 * 0.15**2 / 12 + 0.02, **_NONNEG, label="rocker inertia $I_{S3}$"),
         Quantity("omega1", "rad s-1", "crank angular velocity (omega1); 0 gives statics",
-                 "ω1", default=30.0),
+                 "ω1", default=30.0, label=r"crank speed $\omega_1$"),
         Quantity("epsilon1", "rad s-2", "crank angular acceleration (epsilon1)", "ε1",
-                 default=0.0),
+                 default=0.0, label=r"crank acceleration $\varepsilon_1$"),
         Quantity("tilt", "rad", "inclination of the base AD to the horizontal (gamma + psi "
                  "of the paper)", "γ + ψ", default=math.radians(25.0), minimum=-math.pi,
-                 maximum=math.pi),
-        Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG),
+                 maximum=math.pi, label=r"tilt $\theta$"),
+        Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG,
+                 label="gravity $g$"),
         assembly_branch(),
         Quantity("external_force", "N", "external force on the rocker, across it "
-                 "(positive towards increasing phi3)", default=0.0),
+                 "(positive towards increasing phi3)", default=0.0, label="load across rocker"),
         Quantity("external_force_normal", "N", "external force on the rocker, along D->C",
-                 default=0.0),
+                 default=0.0, label="load along rocker"),
         Quantity("external_force_arm", "m", "distance from D along the rocker where the "
-                 "external force acts", default=0.0),
+                 "external force acts", default=0.0, label="load arm"),
         Quantity("external_moment", "N m", "external couple on the rocker "
-                 "(counter-clockwise)", default=0.0),
+                 "(counter-clockwise)", default=0.0, label="load couple"),
         Quantity("base_motion", "1", "fixed base; the additional rocker's base turning "
                  "with the main rocker (GUIM-1) as a frozen snapshot (rotating: Omega_b and "
                  "E_b held over the cycle); or as a motion (harmonic: the main rocker swings "
                  "base_amplitude sin(base_frequency_ratio phi1 + base_phase), gravity "
                  "turning with it)", default="fixed",
                  choices={"fixed": BASE_FIXED, "rotating": BASE_ROTATING,
-                          "harmonic": BASE_HARMONIC}),
+                          "harmonic": BASE_HARMONIC}, label="base motion"),
         Quantity("base_omega", "rad s-1", "main rocker angular velocity (Omega_b), held "
-                 "over the cycle", "Ω_b", default=0.0, used_when=_ROTATING),
+                 "over the cycle", "Ω_b", default=0.0, used_when=_ROTATING,
+                 label=r"base speed $\Omega_b$"),
         Quantity("base_epsilon", "rad s-2", "main rocker angular acceleration (E_b), held "
-                 "over the cycle", "E_b", default=0.0, used_when=_ROTATING),
+                 "over the cycle", "E_b", default=0.0, used_when=_ROTATING,
+                 label="base acceleration $E_b$"),
         Quantity("base_amplitude", "rad", "amplitude of the main rocker's swing about the "
                  "tilt (A_b)", "A_b", default=0.0, minimum=0.0, maximum=math.pi,
-                 used_when=_HARMONIC),
+                 used_when=_HARMONIC, label="base swing $A_b$"),
         Quantity("base_frequency_ratio", "1", "the main rocker's frequency over the crank's "
                  "(nu = p/q with q <= 12: the motion repeats after q crank turns)", "ν",
-                 default=1.0, minimum=0.0, min_inclusive=False, used_when=_HARMONIC),
+                 default=1.0, minimum=0.0, min_inclusive=False, used_when=_HARMONIC,
+                 label=r"base frequency $\nu$"),
         Quantity("base_phase", "rad", "phase of the main rocker's swing at phi1 = 0",
-                 "φ_b", default=0.0, used_when=_HARMONIC),
+                 "φ_b", default=0.0, used_when=_HARMONIC, label=r"base phase $\varphi_b$"),
         Quantity("crank_pivot_x", "m", "crank pivot A relative to the main rocker pivot O, "
-                 "along the base", default=0.0, used_when=_MOVING),
+                 "along the base", default=0.0, used_when=_MOVING, label="crank pivot $x_A$"),
         Quantity("crank_pivot_y", "m", "crank pivot A relative to the main rocker pivot O, "
-                 "across the base", default=0.0, used_when=_MOVING),
+                 "across the base", default=0.0, used_when=_MOVING, label="crank pivot $y_A$"),
     ),
     outputs=(
         Output("force_peak_A", "N", "peak |F14| at the crank pivot A over a cycle",
-               "|F14|max", _WINDOWED),
+               "|F14|max", _WINDOWED, label="peak $|F_{14}|$ at A"),
         Output("force_peak_B", "N", "peak |F21| at the crank pin B over a cycle",
-               "|F21|max", _WINDOWED),
+               "|F21|max", _WINDOWED, label="peak $|F_{21}|$ at B"),
         Output("force_peak_C", "N", "peak |F32| at the coupler-rocker joint C over a cycle",
-               "|F32|max", _WINDOWED),
+               "|F32|max", _WINDOWED, label="peak $|F_{32}|$ at C"),
         Output("force_peak_D", "N", "peak |F34| at the rocker pivot D over a cycle",
-               "|F34|max", _WINDOWED),
+               "|F34|max", _WINDOWED, label="peak $|F_{34}|$ at D"),
         Output("balancing_moment_peak", "N m", "peak |M_b| over a cycle (balancing "
-               "moment)", "|M_b|max"),
-        Output("balancing_moment_rms", "N m", "RMS of the balancing moment over a cycle"),
+               "moment)", "|M_b|max", label="peak $|M_b|$"),
+        Output("balancing_moment_rms", "N m", "RMS of the balancing moment over a cycle",
+               label="RMS $M_b$"),
         Output("cycle_work", "J", "work of the balancing moment per cycle (integral of M_b "
                "dphi1 along the motion)", "∮M_b dφ1", "equals the kinetic energy lost at "
-               "impact for constant omega1 on the impact branch"),
+               "impact for constant omega1 on the impact branch", label="cycle work"),
         Output("special_crank_angle", "rad", "crank angle of the special position at which "
                "the cycle starts (the impact node phi1*); a second one, where the linkage "
-               "has two, lies pi later", "φ1*"),
+               "has two, lies pi later", "φ1*", label=r"node angle $\varphi_1^*$"),
         Output("assembly_branch", "1", "assembly branch used (sigma)", "σ",
-               flags=BRANCH_FLAGS, undetermined="undetermined"),
+               flags=BRANCH_FLAGS, undetermined="undetermined", label=r"branch $\sigma$"),
     ),
     profiles=(
-        *reaction_profiles((("F21", "crank pin force on the coupler", "coupler"),
-                            ("F34", "base force on the rocker", "rocker"),
-                            ("F32", "coupler force on the rocker", "rocker"),
-                            ("F14", "base force on the crank", "crank"))),
+        *reaction_profiles((("B", "F21", "crank pin force on the coupler", "coupler"),
+                            ("D", "F34", "base force on the rocker", "rocker"),
+                            ("C", "F32", "coupler force on the rocker", "rocker"),
+                            ("A", "F14", "base force on the crank", "crank"))),
         Output("balancing_moment", "N m", "balancing moment on the crank (M_b, virtual "
-               "work)", "M_b"),
+               "work)", "M_b", label="balancing moment $M_b$"),
     ),
-    profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1), from A->D", "φ1"),
+    profile_dim=Quantity("crank_angle", "rad", "crank angle (phi1), from A->D", "φ1",
+                         label=r"crank angle $\varphi_1$"),
     profile_coordinate=lambda method: cell_midpoints(
         method.profile_points, (2 if method.path == PATH_FREE else 1) * 2.0 * np.pi),
     status=("ok", "not_assemblable", "special_position", "nonfinite", "degenerate",

@@ -66,34 +66,6 @@ def _rules(given: dict) -> str | None:
     return None
 
 
-#: the short label a chart shows of each parameter and output (Quantity.label)
-LABELS = {
-    "model": "model", "k": "length ratio $k$", "xi": r"inertia ratio $\xi$",
-    "kappa": r"contact radius $\kappa$", "R": "restitution $R$",
-    "omega1": r"rotor speed $\omega_1$", "l2": "pendulum $l_2$", "striker_mass": "striker mass $m_s$",
-    "tool": "tool", "tool_window": "blade reach", "rotor_inertia_ratio": "rotor inertia $J_1/J_c$",
-    "motor_slope": "motor slope $s_m$", "idle_speed": r"idle speed $\Omega/\omega_1$",
-    "regime": "regime", "amplitude": "amplitude $A$", "frequency_ratio": "frequency ratio $n$",
-    "period": "period $T$", "impact_speed": "impact speed $V^*$",
-    "impact_interval": r"impact interval $\tau_1$", "impacts_to_converge": "impacts to converge",
-    "acceleration_peak": r"peak $|\psi''|$", "restitution_critical": r"critical $R_\mathrm{crit}$",
-    "rotor_speed_ratio": "rotor speed ratio", "n_steps": "steps", "n_rejected": "rejected steps",
-    "n_events": "events", "method_used": "method", "multiplier_modulus": r"multiplier $|\mu|$",
-    "multiplier_angle": r"multiplier angle $\arg\mu$", "stability_margin": r"stability margin $1-|\mu|$",
-    "impact_speed_min_ratio": "slowest/fastest impact", "edge_margin": "edge margin",
-    "attractor_count": "attractors", "basin_fraction": "basin fraction",
-    "error_estimate": "error estimate", "blow_energy": "blow energy $E$", "blow_rate": "blow rate",
-    "time": "time $t$", "rotor_angle": r"rotor angle $\varphi_1$",
-    "swing_angle": r"swing $\psi$", "swing_rate": r"swing rate $\psi'$",
-    "swing_acceleration": r"swing acceleration $\psi''$", "cycle_phase": "cycle phase $s$",
-    "hinge_force_peak": r"peak hinge force $|Q|_\max$", "hinge_impulse": "hinge impulse $S_Q$",
-    "drive_torque_peak": r"peak drive torque $|M_d|_\max$",
-    "drive_torque_mean": r"mean drive torque $\bar M_d$",
-    "drive_power_mean": r"mean drive power $\bar P_d$",
-    "energy_balance_error": "energy balance error",
-    "hinge_force_along": "hinge force along $Q_n$", "hinge_force_across": "hinge force across $Q_t$",
-    "hinge_force": "hinge force $|Q|$", "drive_torque": "drive torque $M_d$",
-}
 
 #: the outputs of the steady cycle's loads (kernels/pendulum/histories.py): they need the
 #: striker's mass
@@ -102,7 +74,6 @@ LOAD_OUTPUTS = ("hinge_force_peak", "hinge_impulse", "drive_torque_peak", "drive
 
 
 DECLARATION = Mechanism(
-    labels=LABELS,
     name="rotary_pendulum",
     title="Rotary-pendulum impact mechanism: steady impact regime",
     summary="closed form (auto): first integral of the paper's equation, amplitude by Newton, "
@@ -126,106 +97,114 @@ DECLARATION = Mechanism(
         Quantity("model", "1", "pendulum model: the paper's equation (paper), the physically "
                  "derived rigid pendulum at constant rotor speed (rigid), a rotor of finite "
                  "inertia with a linear motor law (rotor)", default="paper",
-                 choices=MODELS, compiles_apart=True),
-        Quantity("k", "1", "length ratio l1/l2 (k)", "k", default=2.5, **POSITIVE),
-        Quantity("xi", "1", "inertia ratio m l2^2/J_c (xi)", "ξ", default=4.0, **POSITIVE),
+                 choices=MODELS, compiles_apart=True, label="model"),
+        Quantity("k", "1", "length ratio l1/l2 (k)", "k", default=2.5, **POSITIVE,
+                 label="length ratio $k$"),
+        Quantity("xi", "1", "inertia ratio m l2^2/J_c (xi)", "ξ", default=4.0, **POSITIVE,
+                 label=r"inertia ratio $\xi$"),
         Quantity("kappa", "1", "rigid and rotor models: contact radius over the "
                  "centre-of-percussion radius (kappa); default xi/(1 + xi), contact at the "
                  "striker's centre", "κ", used_when={"model": ("rigid", "rotor")},
-                 **POSITIVE),
+                 **POSITIVE, label=r"contact radius $\kappa$"),
         Quantity("R", "1", "restitution coefficient of the striker on the tool (R)", "R",
-                 default=0.0, minimum=0.0, maximum=1.0, max_inclusive=False),
+                 default=0.0, minimum=0.0, maximum=1.0, max_inclusive=False,
+                 label="restitution $R$"),
         Quantity("omega1", "rad s-1", "rotor angular speed (omega1)", "ω1", default=20.0,
-                 **POSITIVE),
+                 **POSITIVE, label=r"rotor speed $\omega_1$"),
         Quantity("l2", "m", "pendulum length to the striker (l2)", "l2", default=0.04,
-                 **POSITIVE),
+                 **POSITIVE, label="pendulum $l_2$"),
         Quantity("striker_mass", "kg", "the striker's mass (a body with its centre at l2 "
                  "where kappa is its default, at l2 xi/(kappa (1 + xi)) otherwise, and "
                  "centroidal inertia from xi), for the energy per blow and the loads",
-                 "m_s", **POSITIVE),
+                 "m_s", **POSITIVE, label="striker mass $m_s$"),
         Quantity("tool", "1", "impact condition: a stop on the rotor at psi = 0 "
                  "(rotor_stop, the paper's), or a blade fixed in the frame hit by the "
                  "striker when it reaches it with |psi| <= tool_window (lab_window)",
                  default="rotor_stop",
-                 choices=TOOLS, compiles_apart=True),
+                 choices=TOOLS, compiles_apart=True, label="tool"),
         Quantity("tool_window", "rad", "lab_window: reach of the blade as the largest |psi| "
                  "at which the striker meets it (the blade's inner edge is at the striker "
                  "radius there)", default=0.2, minimum=0.0, maximum=math.pi / 2,
-                 min_inclusive=False, used_when={"tool": ("lab_window",)}),
+                 min_inclusive=False, used_when={"tool": ("lab_window",)}, label="blade reach"),
         Quantity("rotor_inertia_ratio", "1", "rotor model: rotor inertia over the striker's "
                  "centroidal inertia (J1/J_c)", "J1/J_c", default=100.0, minimum=0.0,
-                 used_when=_ROTOR),
+                 used_when=_ROTOR, label="rotor inertia $J_1/J_c$"),
         Quantity("motor_slope", "1", "rotor model: slope of the motor law tau_m = s_m "
                  "(Omega_idle - phi1') in J_c omega1 (s_m/(J_c omega1))", "s_m",
-                 default=100.0, minimum=0.0, used_when=_ROTOR),
+                 default=100.0, minimum=0.0, used_when=_ROTOR, label="motor slope $s_m$"),
         Quantity("idle_speed", "1", "rotor model: the motor's no-load speed over omega1 "
                  "(Omega_idle/omega1); the rotor starts at it", "Ω_idle/ω1", default=1.0,
-                 used_when=_ROTOR, **POSITIVE),
+                 used_when=_ROTOR, **POSITIVE, label=r"idle speed $\Omega/\omega_1$"),
     ),
     outputs=(
         Output("regime", "1", "steady regime of the impact motion",
                flags={name: code for code, name in enumerate(REGIMES)}
-               | {"undetermined": -1}, undetermined="undetermined", everywhere=True),
-        Output("amplitude", "rad", "amplitude of the relative swing (A)", "A"),
+               | {"undetermined": -1}, undetermined="undetermined", everywhere=True,
+               label="regime"),
+        Output("amplitude", "rad", "amplitude of the relative swing (A)", "A",
+               label="amplitude $A$"),
         Output("frequency_ratio", "1", "frequency coefficient n (psi ~ A sin(n omega1 t)), "
                "pi over the flight time; NaN on the lab blade, where flights end on the "
-               "blade", "n"),
+               "blade", "n", label="frequency ratio $n$"),
         Output("period", "s", "period of the free relative oscillation T = 2 pi/(n omega1)",
-               "T"),
+               "T", label="period $T$"),
         Output("impact_speed", "m s-1", "normal speed of the striker at impact in steady "
                "state (V* = 2 (1+k) omega1 l2/(1-R) on the rotor stop at constant speed)",
-               "V*"),
+               "V*", label="impact speed $V^*$"),
         Output("impact_interval", "rad", "rotor angle between impacts in steady state "
                "(tau1; on the blade, between the impacts opening each contact)", "τ1",
-               chart_units=("turn", 1.0 / (2.0 * math.pi))),
+               chart_units=("turn", 1.0 / (2.0 * math.pi)), label=r"impact interval $\tau_1$"),
         Output("impacts_to_converge", "1", "impacts from rest to the steady state (to "
                "1e-12 by the closed form, to 10 rtol when integrated; the rotor model on "
                "its stop: estimated past its extrapolated transient, within 3 impacts or "
-               "35 %), or until escape", diagnostic=True, count=True),
+               "35 %), or until escape", diagnostic=True, count=True, label="impacts to converge"),
         Output("acceleration_peak", "rad s-2", "peak relative angular acceleration of the "
-               "pendulum in steady state", "|ψ''|max"),
+               "pendulum in steady state", "|ψ''|max", label=r"peak $|\psi''|$"),
         Output("restitution_critical", "1", "largest R with a periodic impact regime "
                "(R_crit, closed-form models on the rotor stop); NaN if none exists or none "
-               "is known", "R_crit", everywhere=True),
+               "is known", "R_crit", everywhere=True, label=r"critical $R_\mathrm{crit}$"),
         Output("rotor_speed_ratio", "1", "mean rotor speed over the steady cycle over "
-               "omega1 (1 at constant rotor speed)"),
+               "omega1 (1 at constant rotor speed)", label="rotor speed ratio"),
         Output("n_steps", "1", "integration steps, accepted and rejected (0: closed form on "
                "the rotor stop; the rigid model's closed-form flights on the blade count "
                "their exact steps)",
-               diagnostic=True, count=True),
+               diagnostic=True, count=True, label="steps"),
         Output("n_rejected", "1", "rejected integration steps among n_steps",
-               diagnostic=True, count=True),
+               diagnostic=True, count=True, label="rejected steps"),
         Output("n_events", "1", "impact events located by the integrator", diagnostic=True,
-               count=True),
+               count=True, label="events"),
         Output("method_used", "1", "method that produced the values",
                flags={"closed_form": USED_CLOSED, "rk4": USED_RK4, "dopri5": USED_DOPRI5,
                       "dop853": USED_DOP853},
-               everywhere=True),
+               everywhere=True, label="method"),
         Output("multiplier_modulus", "1", "largest modulus |mu| of the multipliers of the "
                "steady cycle's impact map (of its n-fold map for period_n; exact symmetries "
                "removed): below 1 the pattern is stable; R on the rotor stop at constant rotor "
                "speed; by the variational equations, the event-time saltation and Newton's "
                "law differentiated, through slides and accumulated chatter; NaN without a "
                "cycle", "|μ|",
-               on_request=True),
+               on_request=True, label=r"multiplier $|\mu|$"),
         Output("multiplier_angle", "rad", "argument of the leading multiplier in [0, pi]: "
                "near 0 as |mu| -> 1 a fold (the pattern vanishes), pi a period doubling, "
-               "between a complex pair (quasi-periodic motion)", "arg μ", on_request=True),
+               "between a complex pair (quasi-periodic motion)", "arg μ", on_request=True,
+               label=r"multiplier angle $\arg\mu$"),
         Output("stability_margin", "1", "1 - multiplier_modulus: how far the blow pattern is "
-               "from losing stability (negative: unstable)", on_request=True),
+               "from losing stability (negative: unstable)", on_request=True,
+               label=r"stability margin $1-|\mu|$"),
         Output("impact_speed_min_ratio", "1", "slowest impact of the steady cycle over its "
                "fastest (striker normal speeds, all contacts of the cycle): near 0 the "
-               "pattern is one small change from chatter or grazing", on_request=True),
+               "pattern is one small change from chatter or grazing", on_request=True,
+               label="slowest/fastest impact"),
         Output("edge_margin", "rad", "lab_window: the smallest distance window - |psi| of a "
                "steady-cycle impact from the blade's edge: near 0 a border collision (the "
-               "impact slips past the edge)", on_request=True),
+               "impact slips past the edge)", on_request=True, label="edge margin"),
         Output("attractor_count", "1", "distinct steady states reached from method.starts "
                "starting states (rest, then a Halton sequence of arrival states): regime, "
                "period and section state equal to 1e-6; each non-periodic outcome counts "
-               "as one", on_request=True, count=True, everywhere=True),
+               "as one", on_request=True, count=True, everywhere=True, label="attractors"),
         Output("basin_fraction", "1", "share of the starts that reach the steady state "
                "reported (the one reached from rest, the machine's start-up)",
-               on_request=True, everywhere=True),
+               on_request=True, everywhere=True, label="basin fraction"),
         Output("error_estimate", "1", "auto: estimated relative error of the steady cycle's "
                "values (the largest over amplitude, frequency ratio, period, impact speed "
                "and interval, acceleration peak, rotor speed ratio, and where asked for the "
@@ -236,54 +215,62 @@ DECLARATION = Mechanism(
                "tolerance the cycle's section states repeat to (1e-9 at tol >= 1e-9); inf "
                "where the two solves reach different regimes; NaN with a fixed integrator "
                "or without a cycle",
-               diagnostic=True),
+               diagnostic=True, label="error estimate"),
         Output("blow_energy", "J", "energy per blow: striker_mass times the steady impact "
-               "speed squared, over 2", "E_blow", on_request=True),
+               "speed squared, over 2", "E_blow", on_request=True, label="blow energy $E$"),
         Output("blow_rate", "min-1", "blows per minute in steady state: 60 times the mean "
-               "rotor speed over the rotor angle between impacts", on_request=True),
+               "rotor speed over the rotor angle between impacts", on_request=True,
+               label="blow rate"),
         Output("hinge_force_peak", "N", "peak force of the pendulum's hinge on the rotor over "
                "the steady cycle, the impacts' impulses apart (NaN on a cycle that "
-               "slides along the blade or chatters)", "|Q|max", on_request=True),
+               "slides along the blade or chatters)", "|Q|max", on_request=True,
+               label=r"peak hinge force $|Q|_\max$"),
         Output("hinge_impulse", "N s", "largest impulse through the hinge on the rotor "
                "at an impact of the steady cycle: on the rotor stop zero where the "
                "contact is at the centre of percussion (kappa = 1), the paper's premise "
                "for a constant rotor speed",
-               "S_Q", on_request=True),
+               "S_Q", on_request=True, label="hinge impulse $S_Q$"),
         Output("drive_torque_peak", "N m", "peak |torque| of the rotor's drive over the "
                "steady cycle: at constant rotor speed the torque that holds it (dH_O/dt of "
                "the pendulum), its impulses at the impacts apart; the rotor model's motor "
-               "torque", "|M_d|max", on_request=True),
+               "torque", "|M_d|max", on_request=True, label=r"peak drive torque $|M_d|_\max$"),
         Output("drive_torque_mean", "N m", "mean torque of the rotor's drive over the steady "
-               "cycle, the impacts' angular impulses included", "M̄_d", on_request=True),
+               "cycle, the impacts' angular impulses included", "M̄_d", on_request=True,
+               label=r"mean drive torque $\bar M_d$"),
         Output("drive_power_mean", "W", "mean power of the rotor's drive over the steady "
-               "cycle: its work per cycle over the cycle's time", "P̄_d", on_request=True),
+               "cycle: its work per cycle over the cycle's time", "P̄_d", on_request=True,
+               label=r"mean drive power $\bar P_d$"),
         Output("energy_balance_error", "1", "the drive's work per steady cycle (its "
                "torque integrated along the cycle's history, with its angular impulses at "
                "the impacts at constant rotor speed) less the impacts' losses "
                "(1 - R^2) v_n^2/(2 J M^-1 J^T), over that loss: the history's own error",
-               diagnostic=True, on_request=True),
+               diagnostic=True, on_request=True, label="energy balance error"),
     ),
     profiles=(
-        Output("time", "s", "time since the impact that opens the steady cycle", "t"),
-        Output("rotor_angle", "rad", "rotor angle turned since that impact (omega1 t)", "φ1"),
+        Output("time", "s", "time since the impact that opens the steady cycle", "t",
+               label="time $t$"),
+        Output("rotor_angle", "rad", "rotor angle turned since that impact (omega1 t)", "φ1",
+               label=r"rotor angle $\varphi_1$"),
         Output("swing_angle", "rad", "relative angle of the pendulum (psi), 0 at the stop",
-               "ψ"),
+               "ψ", label=r"swing $\psi$"),
         Output("swing_rate", "rad s-1", "relative angular velocity of the pendulum (psi')",
-               "ψ′"),
+               "ψ′", label=r"swing rate $\psi'$"),
         Output("swing_acceleration", "rad s-2", "relative angular acceleration of the "
-               "pendulum (psi'')", "ψ″"),
+               "pendulum (psi'')", "ψ″", label=r"swing acceleration $\psi''$"),
         Output("hinge_force_along", "N", "force of the pendulum's hinge on the rotor along "
-               "the pendulum, positive outward from the hinge (needs striker_mass)", "Q_n"),
+               "the pendulum, positive outward from the hinge (needs striker_mass)", "Q_n",
+               label="hinge force along $Q_n$"),
         Output("hinge_force_across", "N", "force of the pendulum's hinge on the rotor across "
-               "the pendulum, positive towards increasing psi (needs striker_mass)", "Q_t"),
+               "the pendulum, positive towards increasing psi (needs striker_mass)", "Q_t",
+               label="hinge force across $Q_t$"),
         Output("hinge_force", "N", "magnitude of the hinge's force on the rotor (needs "
-               "striker_mass)", "|Q|"),
+               "striker_mass)", "|Q|", label="hinge force $|Q|$"),
         Output("drive_torque", "N m", "torque of the rotor's drive: at constant rotor speed "
                "the torque that holds it, for the rotor model its motor's (needs "
-               "striker_mass)", "M_d"),
+               "striker_mass)", "M_d", label="drive torque $M_d$"),
     ),
     profile_dim=Quantity("cycle_phase", "1", "phase of the steady cycle: 0 at an impact, 1 "
-                         "at the next", "s"),
+                         "at the next", "s", label="cycle phase $s$"),
     profile_coordinate=lambda method: cell_midpoints(method.profile_points, 1.0),
     status=("ok", "escape", "no_impact", "not_periodic", "separatrix", "max_steps",
             "step_underflow", "degenerate", "nonfinite"),

@@ -28,33 +28,11 @@ from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quan
 from kernels.extrema import cell_midpoints, clustered_points, peak_search
 from kernels.fourbar import CHANGE_POINT_B, crank_turns_fully, vector_kinematics
 
-#: the short label a chart shows of each parameter, output and profile (Quantity.label)
-LABELS = {
-    "lambda2": r"stage 1 rod $\lambda_2$", "lambda3": r"stage 1 crank $\lambda_3$",
-    "mu4": r"stage 2 rod $\mu_4$", "mu5": r"stage 2 rocker $\mu_5$",
-    "beta": r"phase $\beta$", "delta": r"arm offset $\delta$", "direction": "direction",
-    "omega1": r"crank speed $\omega_1$", "crank_length": "crank $l_1$",
-    "rocker_inertia": "rocker inertia $J_5$", "gamma1": r"stage 1 node $\gamma_1$",
-    "gamma2": r"stage 2 node $\gamma_2$", "restitution_kinematic": "kinematic restitution $R_k$",
-    "transfer_stage1_low": r"stage 1 $u_{31}$ low", "transfer_stage1_high": r"stage 1 $u_{31}$ high",
-    "transfer_impact_1": r"$u_{51}$ at impact 1", "transfer_impact_2": r"$u_{51}$ at impact 2",
-    "transfer_stage1_impact_1": r"$u_{31}$ at impact 1",
-    "transfer_stage1_impact_2": r"$u_{31}$ at impact 2",
-    "impact_crank_angle_1": r"impact 1 at $\varphi_1$", "impact_crank_angle_2": r"impact 2 at $\varphi_1$",
-    "impact_speed_1": "impact speed 1", "impact_speed_2": "impact speed 2",
-    "transfer_peak": r"peak $|u_{51}|$", "transfer2_peak": r"peak $|u'_{51}|$",
-    "assembly_branch_stage2": r"stage 2 branch $\sigma_2$",
-    "blow_energy_1": "blow energy 1", "blow_energy_2": "blow energy 2", "blow_rate": "blow rate",
-    "rocker_angle": r"rocker angle $\varphi_5$", "crank_angle": r"crank angle $\varphi_1$",
-    "link3_angle": r"link 3 angle $\varphi_3$ (switching)",
-    "link3_angle_branch_plus": r"$\varphi_3$ on $\sigma_1 = +1$",
-    "link3_angle_branch_minus": r"$\varphi_3$ on $\sigma_1 = -1$",
-    "transfer_stage2": r"stage 2 ratio $u_{53}$",
-}
 
 
 #: the profiles' coordinate: the crank angle over the 4 pi cycle, at cell midpoints
-CYCLE_ANGLE = Quantity("crank_angle", "rad", "crank angle (phi1) over the 4 pi cycle", "φ1")
+CYCLE_ANGLE = Quantity("crank_angle", "rad", "crank angle (phi1) over the 4 pi cycle", "φ1",
+                       label=r"crank angle $\varphi_1$")
 
 
 def cycle_angles(method) -> np.ndarray:
@@ -63,7 +41,6 @@ def cycle_angles(method) -> np.ndarray:
 
 
 DECLARATION = Mechanism(
-    labels=LABELS,
     name="six_link",
     title="Six-link impact mechanism with alternating branch switching",
     summary="stage 1 on the smooth path through its node (branch alternation rule), stage 2 "
@@ -76,57 +53,71 @@ DECLARATION = Mechanism(
                "patented in 2022)",
     parameters=(
         Quantity("lambda2", "1", "stage 1 coupler ratio l2/l1 (lambda2)", "λ2", default=1.6,
-                 **POSITIVE),
+                 **POSITIVE, label=r"stage 1 rod $\lambda_2$"),
         Quantity("lambda3", "1", "stage 1 driven crank ratio l3/l1 (lambda3); the base is "
-                 "lambda6 = 1 - lambda2 + lambda3", "λ3", default=1.3, **POSITIVE),
+                 "lambda6 = 1 - lambda2 + lambda3", "λ3", default=1.3, **POSITIVE,
+                 label=r"stage 1 crank $\lambda_3$"),
         Quantity("mu4", "1", "stage 2 coupler ratio l4/l3 (the paper's second lambda4)",
-                 "λ4 (stage 2)", default=1.5, **POSITIVE),
+                 "λ4 (stage 2)", default=1.5, **POSITIVE, label=r"stage 2 rod $\mu_4$"),
         Quantity("mu5", "1", "stage 2 rocker ratio l5/l3 (the paper's lambda5); the base "
-                 "is mu6 = 1 - mu4 + mu5", "λ5", default=2.5, **POSITIVE),
+                 "is mu6 = 1 - mu4 + mu5", "λ5", default=2.5, **POSITIVE,
+                 label=r"stage 2 rocker $\mu_5$"),
         Quantity("beta", "rad", "direction of the stage 2 base DE relative to AD (beta)", "β",
-                 default=0.0, minimum=-2 * math.pi, maximum=2 * math.pi),
+                 default=0.0, minimum=-2 * math.pi, maximum=2 * math.pi, label=r"phase $\beta$"),
         Quantity("delta", "rad", "offset of the stage 2 crank arm on link 3 (delta)", "δ",
-                 default=0.0, minimum=-2 * math.pi, maximum=2 * math.pi),
+                 default=0.0, minimum=-2 * math.pi, maximum=2 * math.pi,
+                 label=r"arm offset $\delta$"),
         Quantity("direction", "1", "rotation direction of the crank: +1 counter-clockwise",
-                 default=1, choices={1: 1, -1: -1}),
+                 default=1, choices={1: 1, -1: -1}, label="direction"),
         Quantity("omega1", "rad s-1", "crank angular speed (|omega1|)", "ω1", default=30.0,
-                 **POSITIVE),
-        Quantity("crank_length", "m", "crank length (l1)", "l1", default=0.1, **POSITIVE),
+                 **POSITIVE, label=r"crank speed $\omega_1$"),
+        Quantity("crank_length", "m", "crank length (l1)", "l1", default=0.1, **POSITIVE,
+                 label="crank $l_1$"),
         Quantity("rocker_inertia", "kg m2", "moment of inertia of the stage-2 rocker and "
-                 "striker about its pivot (J5), for the energy per blow", "J5", **POSITIVE),
+                 "striker about its pivot (J5), for the energy per blow", "J5", **POSITIVE,
+                 label="rocker inertia $J_5$"),
     ),
     outputs=(
         Output("gamma1", "1", "stage 1 node parameter sqrt(lambda6 lambda2/lambda3) "
-               "(gamma1)", "γ1"),
-        Output("gamma2", "1", "stage 2 node parameter sqrt(mu6 mu4/mu5) (gamma2)", "γ2"),
+               "(gamma1)", "γ1", label=r"stage 1 node $\gamma_1$"),
+        Output("gamma2", "1", "stage 2 node parameter sqrt(mu6 mu4/mu5) (gamma2)", "γ2",
+               label=r"stage 2 node $\gamma_2$"),
         Output("restitution_kinematic", "1", "kinematic restitution coefficient of stage 2 "
-               "(Rk)", "Rk"),
+               "(Rk)", "Rk", label="kinematic restitution $R_k$"),
         Output("transfer_stage1_low", "1", "stage 1 u31 at its special position, low value "
-               "(1 - gamma1)/(1 - lambda6)"),
+               "(1 - gamma1)/(1 - lambda6)", label="stage 1 $u_{31}$ low"),
         Output("transfer_stage1_high", "1", "stage 1 u31 at its special position, high "
-               "value (1 + gamma1)/(1 - lambda6)"),
-        Output("transfer_impact_1", "1", "u51 at the first impact of the 4 pi cycle", "u51"),
+               "value (1 + gamma1)/(1 - lambda6)", label="stage 1 $u_{31}$ high"),
+        Output("transfer_impact_1", "1", "u51 at the first impact of the 4 pi cycle", "u51",
+               label="$u_{51}$ at impact 1"),
         Output("transfer_impact_2", "1", "u51 at the second impact of the 4 pi cycle",
-               "u51"),
-        Output("transfer_stage1_impact_1", "1", "stage 1 u31 at the first impact", "u31"),
-        Output("transfer_stage1_impact_2", "1", "stage 1 u31 at the second impact", "u31"),
+               "u51", label="$u_{51}$ at impact 2"),
+        Output("transfer_stage1_impact_1", "1", "stage 1 u31 at the first impact", "u31",
+               label="$u_{31}$ at impact 1"),
+        Output("transfer_stage1_impact_2", "1", "stage 1 u31 at the second impact", "u31",
+               label="$u_{31}$ at impact 2"),
         Output("impact_crank_angle_1", "rad", "crank angle of the first impact in "
-               "[0, 4 pi)", "φ1"),
+               "[0, 4 pi)", "φ1", label=r"impact 1 at $\varphi_1$"),
         Output("impact_crank_angle_2", "rad", "crank angle of the second impact in "
-               "[0, 4 pi)", "φ1"),
-        Output("impact_speed_1", "m s-1", "striker (rocker tip) speed at the first impact"),
-        Output("impact_speed_2", "m s-1", "striker (rocker tip) speed at the second impact"),
-        Output("transfer_peak", "1", "peak |u51| over the 4 pi cycle", "|u51|max"),
-        Output("transfer2_peak", "1", "peak |u'51| over the 4 pi cycle", "|u′51|max"),
+               "[0, 4 pi)", "φ1", label=r"impact 2 at $\varphi_1$"),
+        Output("impact_speed_1", "m s-1", "striker (rocker tip) speed at the first impact",
+               label="impact speed 1"),
+        Output("impact_speed_2", "m s-1", "striker (rocker tip) speed at the second impact",
+               label="impact speed 2"),
+        Output("transfer_peak", "1", "peak |u51| over the 4 pi cycle", "|u51|max",
+               label="peak $|u_{51}|$"),
+        Output("transfer2_peak", "1", "peak |u'51| over the 4 pi cycle", "|u′51|max",
+               label="peak $|u'_{51}|$"),
         Output("assembly_branch_stage2", "1", "stage 2 assembly branch (sigma2), the impact "
                "branch for the rotation direction", "σ2", flags=BRANCH_FLAGS,
-               undetermined="undetermined"),
+               undetermined="undetermined", label=r"stage 2 branch $\sigma_2$"),
         Output("blow_energy_1", "J", "energy of the first blow of the 4 pi cycle: the stage-2 "
-               "rocker's kinetic energy at it, J5 (u51 omega1)^2 / 2", on_request=True),
+               "rocker's kinetic energy at it, J5 (u51 omega1)^2 / 2", on_request=True,
+               label="blow energy 1"),
         Output("blow_energy_2", "J", "energy of the second blow of the 4 pi cycle",
-               on_request=True),
+               on_request=True, label="blow energy 2"),
         Output("blow_rate", "min-1", "blows per minute (two per 4 pi cycle: one a crank "
-               "turn)", on_request=True),
+               "turn)", on_request=True, label="blow rate"),
     ),
     rules=lambda given: (
         "rocker_inertia: required for the outputs blow_energy_1 and blow_energy_2 (the "
@@ -134,18 +125,20 @@ DECLARATION = Mechanism(
         if given.get("outputs", set()) & {"blow_energy_1", "blow_energy_2"}
         and "rocker_inertia" not in given else None),
     profiles=(Output("rocker_angle", "rad", "stage 2 rocker angle (phi5), from the "
-                     "direction D->E, in [0, 2 pi)", "φ5"),
+                     "direction D->E, in [0, 2 pi)", "φ5", label=r"rocker angle $\varphi_5$"),
               Output("link3_angle", "rad", "link 3 angle (phi3) on the switching path, "
                      "from the direction A->D, counted on (phi1 < phi3 < phi1 + 2 pi)", "φ3",
-                     on_request=True),
+                     on_request=True, label=r"link 3 angle $\varphi_3$ (switching)"),
               Output("link3_angle_branch_plus", "rad", "link 3 angle on stage 1's branch "
                      "sigma1 = +1 throughout ([SIX]'s second law, formula (2)), counted as "
-                     "link3_angle", "φ3 (σ1 = +1)", on_request=True),
+                     "link3_angle", "φ3 (σ1 = +1)", on_request=True,
+                     label=r"$\varphi_3$ on $\sigma_1 = +1$"),
               Output("link3_angle_branch_minus", "rad", "link 3 angle on stage 1's branch "
                      "sigma1 = -1 throughout ([SIX]'s first law, formula (1)), counted as "
-                     "link3_angle", "φ3 (σ1 = −1)", on_request=True),
+                     "link3_angle", "φ3 (σ1 = −1)", on_request=True,
+                     label=r"$\varphi_3$ on $\sigma_1 = -1$"),
               Output("transfer_stage2", "1", "stage 2 transfer ratio u53 = dphi5/dphi3 on "
-                     "its impact branch", "u53", on_request=True)),
+                     "its impact branch", "u53", on_request=True, label="stage 2 ratio $u_{53}$")),
     profile_dim=CYCLE_ANGLE,
     profile_coordinate=cycle_angles,
     status=("ok", "not_assemblable", "nonfinite"),

@@ -65,27 +65,6 @@ JOINTS = (("A", "F16", "base force on the crank", "crank"),
           ("G", "F54", "stage 2 coupler force on the rocker", "rocker"),
           ("E", "F56", "base force on the rocker", "rocker"))
 
-LABELS = {
-    **{name: sl.LABELS[name] for name in _GEOMETRY if name in sl.LABELS},
-    "epsilon1": r"crank acceleration $\varepsilon_1$", "tilt": r"tilt $\theta$",
-    "g": "gravity $g$",
-    **{f"m{i}": f"{link} mass $m_{i}$" for i, (link, _, _) in _LINK.items()},
-    **{f"s{i}": f"{link} centroid $s_{i}$" for i, (link, _, _) in _LINK.items()},
-    **{f"q{i}": f"{link} offset $q_{i}$" for i, (link, _, _) in _LINK.items()},
-    **{f"J{i}": f"{link} inertia $I_{{S{i}}}$" for i, (link, _, _) in _LINK.items()},
-    **{f"force_peak_{joint}": rf"peak $|F_{{{force[1:]}}}|$ at {joint}"
-       for joint, force, _, _ in JOINTS},
-    **{f"{force}_{c}": rf"$F_{{{force[1:]}}}$ {side} {link}"
-       for _, force, _, link in JOINTS for c, side in (("n", "along"), ("t", "across"))},
-    **{force: rf"$|F_{{{force[1:]}}}|$ at {joint}" for joint, force, _, _ in JOINTS},
-    "balancing_moment_peak": r"peak $|M_b|$", "balancing_moment_rms": r"RMS $M_b$",
-    "cycle_work": "cycle work", "balancing_moment": "balancing moment $M_b$",
-    "single_stage_omega1": r"single four-bar $\omega_1$",
-    **{f"force_ratio_{j}": f"load at {j}, six-link / four-bar" for j in "FGE"},
-    "force_ratio_max": "largest load, six-link / four-bar",
-    "drive_torque_ratio": "drive torque, six-link / four-bar",
-    "crank_angle": r"crank angle $\varphi_1$",
-}
 
 
 def _link_quantities(i: int) -> tuple:
@@ -94,17 +73,19 @@ def _link_quantities(i: int) -> tuple:
     link, origin, line = _LINK[i]
     mass, length = _MASS[i], _LENGTH[i]
     return (
-        Quantity(f"m{i}", "kg", f"{link} mass (m{i})", f"m{i}", default=mass, **_NONNEG),
+        Quantity(f"m{i}", "kg", f"{link} mass (m{i})", f"m{i}", default=mass, **_NONNEG,
+                 label=f"{link} mass $m_{i}$"),
         Quantity(f"s{i}", "1", f"{link} centroid along {line}, fraction of its length "
-                 f"from {origin}", default=0.5),
-        Quantity(f"q{i}", "m", f"{link} centroid offset across the link", default=0.0),
+                 f"from {origin}", default=0.5, label=f"{link} centroid $s_{i}$"),
+        Quantity(f"q{i}", "m", f"{link} centroid offset across the link", default=0.0,
+                 label=f"{link} offset $q_{i}$"),
         Quantity(f"J{i}", "kg m2", f"{link} centroidal moment of inertia (I_S{i})",
-                 f"I_S{i}", default=mass * length**2 / 12.0, **_NONNEG),
+                 f"I_S{i}", default=mass * length**2 / 12.0, **_NONNEG,
+                 label=f"{link} inertia $I_{{S{i}}}$"),
     )
 
 
 DECLARATION = Mechanism(
-    labels=LABELS,
     name="six_link_forces",
     title="Kinetostatics of the six-link impact mechanism",
     summary="both stages by the Assur-dyad vector route of linkage_forces (stage 2 first, "
@@ -117,44 +98,49 @@ DECLARATION = Mechanism(
     parameters=(
         *(_SIX[name] for name in _GEOMETRY),
         Quantity("epsilon1", "rad s-2", "crank angular acceleration (epsilon1, "
-                 "counter-clockwise positive)", "ε1", default=0.0),
+                 "counter-clockwise positive)", "ε1", default=0.0,
+                 label=r"crank acceleration $\varepsilon_1$"),
         *(q for i in _LINK for q in _link_quantities(i)),
         Quantity("tilt", "rad", "inclination of the base AD to the horizontal", "θ",
-                 default=0.0, minimum=-math.pi, maximum=math.pi),
-        Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG),
+                 default=0.0, minimum=-math.pi, maximum=math.pi, label=r"tilt $\theta$"),
+        Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG,
+                 label="gravity $g$"),
     ),
     outputs=(
         *(Output(f"force_peak_{joint}", "N", f"peak |{force}| at {joint} over the 4 pi "
-                 "cycle", f"|{force}|max", _WINDOWED if joint in "ABCD" else _AT_BLOWS)
+                 "cycle", f"|{force}|max", _WINDOWED if joint in "ABCD" else _AT_BLOWS,
+                 label=rf"peak $|F_{{{force[1:]}}}|$ at {joint}")
           for joint, force, _, _ in JOINTS),
         Output("balancing_moment_peak", "N m", "peak |M_b| over the 4 pi cycle (balancing "
-               "moment on the crank)", "|M_b|max", _AT_BLOWS),
+               "moment on the crank)", "|M_b|max", _AT_BLOWS, label="peak $|M_b|$"),
         Output("balancing_moment_rms", "N m", "RMS of the balancing moment over the 4 pi "
-               "cycle"),
+               "cycle", label="RMS $M_b$"),
         Output("cycle_work", "J", "work of the balancing moment over the 4 pi cycle (two "
                "blows; integral of M_b dphi1 along the motion)", "∮M_b dφ1", "equals the "
-               "kinetic energy the two blows take at constant omega1"),
+               "kinetic energy the two blows take at constant omega1", label="cycle work"),
         Output("single_stage_omega1", "rad s-1", "crank speed of the single impact four-bar "
                "(stage 2 alone, its crank driven directly) with the same mean energy per "
-               "blow: |omega1| sqrt((u31_1^2 + u31_2^2)/2), u31 at the two blows", "ω1,single"),
+               "blow: |omega1| sqrt((u31_1^2 + u31_2^2)/2), u31 at the two blows", "ω1,single",
+               label=r"single four-bar $\omega_1$"),
         *(Output(f"force_ratio_{joint}", "1", f"peak |{force}| at {joint} over the single "
                  f"four-bar's peak at its {where} ([SIX]'s claim: below 1, lower loads)",
-                 f"|{force}|max ratio", _AT_BLOWS, marks=_EQUAL)
+                 f"|{force}|max ratio", _AT_BLOWS, marks=_EQUAL,
+                 label=f"load at {joint}, six-link / four-bar")
           for joint, force, where in (("F", "F43", "crank pin"),
                                       ("G", "F54", "coupler-rocker joint"),
                                       ("E", "F56", "rocker pivot"))),
         Output("force_ratio_max", "1", "the largest joint force peak of the six-link over "
                "the single four-bar's (every joint of each)", "max |F| ratio", _WINDOWED,
-               marks=_EQUAL),
+               marks=_EQUAL, label="largest load, six-link / four-bar"),
         Output("drive_torque_ratio", "1", "peak balancing moment |M_b| of the six-link over "
                "the single four-bar's (each crank does the same work a turn: one blow's "
-               "loss)", "|M_b|max ratio", _AT_BLOWS, marks=_EQUAL),
+               "loss)", "|M_b|max ratio", _AT_BLOWS, marks=_EQUAL,
+               label="drive torque, six-link / four-bar"),
     ),
     profiles=(
-        *ks.reaction_profiles(tuple((force, what, link) for _, force, what, link in JOINTS),
-                              magnitude=True),
+        *ks.reaction_profiles(JOINTS, magnitude=True),
         Output("balancing_moment", "N m", "balancing moment on the crank (M_b, virtual "
-               "work)", "M_b"),
+               "work)", "M_b", label="balancing moment $M_b$"),
     ),
     profile_dim=sl.CYCLE_ANGLE,
     profile_coordinate=sl.cycle_angles,

@@ -49,49 +49,9 @@ def _rules(given: dict) -> str | None:
     return None
 
 
-#: the short label a chart shows of each parameter, output and profile (Quantity.label)
-LABELS = {
-    "type": "type", "largest_link": "largest link ratio", "base_root": "base root",
-    "lambda0": r"base ratio $\lambda_0$", "lambda2": r"rod ratio $\lambda_2$",
-    "lambda3": r"rocker ratio $\lambda_3$", "design_restitution": "design restitution $R_d$",
-    "R": "material restitution $R$", "crank_length": "crank $l_1$",
-    "m1": "crank mass $m_1$", "m2": "coupler mass $m_2$", "m3": "rocker mass $m_3$",
-    "s1": "crank centroid $s_1$", "s2": "coupler centroid $s_2$", "s3": "rocker centroid $s_3$",
-    "q1": "crank offset $q_1$", "q2": "coupler offset $q_2$", "q3": "rocker offset $q_3$",
-    "J1": "crank inertia $I_{S1}$", "J2": "coupler inertia $I_{S2}$",
-    "J3": "rocker inertia $I_{S3}$", "flywheel_inertia": "flywheel $J_f$",
-    "motor_law": "motor law", "stall_torque": "stall torque $M_0$",
-    "idle_speed": r"idle speed $\omega_\mathrm{idle}$", "omega1": r"mean crank speed $\omega_1$",
-    "tilt": r"tilt $\theta$", "g": "gravity $g$", "load_force_x": "load along base",
-    "load_force_y": "load across base", "load_arm": "load arm", "load_offset": "load offset",
-    "load_moment": "load couple", "impact_law": "impact law",
-    "mean_crank_speed": r"mean crank speed $\bar\omega_1$",
-    "speed_fluctuation": r"speed fluctuation $\delta$",
-    "crank_speed_before_blow": r"$\omega_1^-$ before blow",
-    "crank_speed_after_blow": r"$\omega_1^+$ after blow",
-    "crank_speed_jump": r"speed jump $\Delta\omega_1$", "tool_impulse": r"tool impulse $\Pi$",
-    "crank_impulse": "crank impulse $H$", "motor_torque_peak": r"peak torque $M_\max$",
-    "motor_torque_rms": r"RMS torque $M_\mathrm{rms}$", "motor_power_mean": r"mean power $\bar P$",
-    "blow_energy": "blow energy $E$", "blow_loss": r"blow loss $\Delta E$",
-    "energy_to_material": r"to material $\Delta E_\mathrm{tool}$",
-    "capture_loss": r"capture loss $\Delta E_\mathrm{cap}$", "blow_rate": "blow rate",
-    "blow_efficiency": r"blow efficiency $\eta$", "cycle_period": "cycle period $T_c$",
-    "impact_speed": "impact speed $v$", "restitution_kinematic": "kinematic restitution $R_k$",
-    "restitution_mismatch": "mismatch $R_k + R$", "reduced_inertia_before": "$J^-$ before blow",
-    "reduced_inertia_after": "$J^+$ after blow", "energy_balance_residual": "energy residual",
-    "flywheel_sizing": "flywheel sizing", "revolutions": "revolutions", "n_steps": "steps",
-    "dynamic_force_peak_A": r"peak $|F_{14}|$ at A", "dynamic_force_peak_B": r"peak $|F_{21}|$ at B",
-    "dynamic_force_peak_C": r"peak $|F_{32}|$ at C", "dynamic_force_peak_D": r"peak $|F_{34}|$ at D",
-    "flywheel_for_delta": r"flywheel for $\delta$",
-    "flywheel_for_delta_classical": r"flywheel for $\delta$ (classical)",
-    "crank_speed": r"crank speed $\omega_1$", "crank_acceleration": r"crank acceleration $\varepsilon_1$",
-    "motor_torque": "motor torque $M$", "shaft_torque": "shaft torque",
-    "angle_after_blow": r"angle after blow $\varphi_1-\varphi_1^*$",
-}
 
 
 DECLARATION = Mechanism(
-    labels=LABELS,
     name="impact_machine",
     title="Crank-driven impact machine: energy per blow, motor, flywheel",
     summary="one degree of freedom between blows (reduced inertia J(phi1), motor law, "
@@ -111,142 +71,164 @@ DECLARATION = Mechanism(
         Quantity("base_root", "1", "type b: which root of the synthesis quadratic is the "
                  "base", default="smaller",
                  choices={"smaller": ROOT_SMALLER_BASE, "larger": ROOT_LARGER_BASE},
-                 used_when={"type": ("b",)}),
+                 used_when={"type": ("b",)}, label="base root"),
         Quantity("lambda0", "1", "base ratio l0/l1 (type general)", "λ0",
-                 used_when={"type": ("general",)}, **POSITIVE),
+                 used_when={"type": ("general",)}, **POSITIVE, label=r"base ratio $\lambda_0$"),
         Quantity("lambda2", "1", "coupler ratio l2/l1 (type general)", "λ2",
-                 used_when={"type": ("general",)}, **POSITIVE),
+                 used_when={"type": ("general",)}, **POSITIVE, label=r"rod ratio $\lambda_2$"),
         Quantity("lambda3", "1", "rocker ratio l3/l1 (type general)", "λ3",
-                 used_when={"type": ("general",)}, **POSITIVE),
+                 used_when={"type": ("general",)}, **POSITIVE, label=r"rocker ratio $\lambda_3$"),
         Quantity("design_restitution", "1", "restitution the linkage is synthesised for "
                  "(Rk = -design_restitution); \"material\": the worked material's R",
                  "R_d", default="material", minimum=0.0, maximum=1.0, min_inclusive=False,
                  max_inclusive=False, aliases={"material": MATERIAL},
-                 used_when={"type": TYPES}),
+                 used_when={"type": TYPES}, label="design restitution $R_d$"),
         Quantity("R", "1", "restitution coefficient of the worked material (R): Newton's "
-                 "law at the tool", "R", default=0.3, minimum=0.0, maximum=1.0),
-        Quantity("crank_length", "m", "crank length (l1)", "l1", default=0.1, **POSITIVE),
+                 "law at the tool", "R", default=0.3, minimum=0.0, maximum=1.0,
+                 label="material restitution $R$"),
+        Quantity("crank_length", "m", "crank length (l1)", "l1", default=0.1, **POSITIVE,
+                 label="crank $l_1$"),
         # the link masses, centroids and inertias are linkage_forces', declared there once
         *(kinetostatics.DECLARATION.parameter(name) for name in LINK_MASSES),
         Quantity("flywheel_inertia", "kg m2", "flywheel on the crank shaft (J_f); "
                  "\"for_delta_target\": the flywheel that holds the speed fluctuation at "
                  "method.delta_target (its exact root)", "J_f", default=5.0,
-                 aliases={"for_delta_target": FOR_DELTA}, **_NONNEG),
+                 aliases={"for_delta_target": FOR_DELTA}, **_NONNEG, label="flywheel $J_f$"),
         Quantity("motor_law", "1", "motor torque-speed law: linear M0 (1 - omega1/"
                  "omega_idle), or constant M0", default="linear",
-                 choices={"linear": MOTOR_LINEAR, "constant": MOTOR_CONSTANT}),
+                 choices={"linear": MOTOR_LINEAR, "constant": MOTOR_CONSTANT}, label="motor law"),
         Quantity("stall_torque", "N m", "motor torque at zero speed (M0)", "M0",
-                 default=1200.0, **POSITIVE),
+                 default=1200.0, **POSITIVE, label="stall torque $M_0$"),
         Quantity("idle_speed", "rad s-1", "motor speed at zero torque (omega_idle)", "ω_idle",
-                 default=32.0, used_when=_LINEAR, **POSITIVE),
+                 default=32.0, used_when=_LINEAR, **POSITIVE,
+                 label=r"idle speed $\omega_\mathrm{idle}$"),
         Quantity("omega1", "rad s-1", "the steady mean crank speed to hold; given, the "
                  "motor's idle speed follows from it (its exact root; linear motor law)",
-                 "ω1", used_when=_LINEAR, replaces="idle_speed", **POSITIVE),
+                 "ω1", used_when=_LINEAR, replaces="idle_speed", **POSITIVE,
+                 label=r"mean crank speed $\omega_1$"),
         Quantity("tilt", "rad", "inclination of the base AD to the horizontal", "θ",
-                 default=math.radians(25.0), minimum=-math.pi, maximum=math.pi),
-        Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG),
+                 default=math.radians(25.0), minimum=-math.pi, maximum=math.pi,
+                 label=r"tilt $\theta$"),
+        Quantity("g", "m s-2", "gravitational acceleration", "g", default=9.81, **_NONNEG,
+                 label="gravity $g$"),
         Quantity("load_force_x", "N", "load on the rocker, along the base A->D (fixed in "
-                 "the base frame: conservative)", default=0.0),
-        Quantity("load_force_y", "N", "load on the rocker, across the base", default=0.0),
+                 "the base frame: conservative)", default=0.0, label="load along base"),
+        Quantity("load_force_y", "N", "load on the rocker, across the base", default=0.0,
+                 label="load across base"),
         Quantity("load_arm", "m", "load point on the rocker: distance from D along D->C",
-                 default=0.0),
+                 default=0.0, label="load arm"),
         Quantity("load_offset", "m", "load point on the rocker: offset across the rocker",
-                 default=0.0),
+                 default=0.0, label="load offset"),
         Quantity("load_moment", "N m", "couple on the rocker (counter-clockwise)",
-                 default=0.0),
+                 default=0.0, label="load couple"),
         Quantity("impact_law", "1", "the blow: generalised Newton impact (energy-"
                  "consistent), or the kinematic law (comparison only: it can create "
                  "energy)", default="generalized",
-                 choices={"generalized": LAW_GENERALIZED, "kinematic": LAW_KINEMATIC}),
+                 choices={"generalized": LAW_GENERALIZED, "kinematic": LAW_KINEMATIC},
+                 label="impact law"),
     ),
     outputs=(
         Output("flywheel_inertia", "kg m2", "the flywheel, given or sized for "
-               "method.delta_target", "J_f", echoes="flywheel_inertia"),
+               "method.delta_target", "J_f", echoes="flywheel_inertia", label="flywheel $J_f$"),
         Output("mean_crank_speed", "rad s-1", "time-mean crank speed over the steady "
-               "cycle (2 pi / T_c)", "ω_mean"),
+               "cycle (2 pi / T_c)", "ω_mean", label=r"mean crank speed $\bar\omega_1$"),
         Output("speed_fluctuation", "1", "coefficient of speed fluctuation (omega_max - "
-               "omega_min)/omega_mean, the one-sided speeds at the blow included", "δ"),
+               "omega_min)/omega_mean, the one-sided speeds at the blow included", "δ",
+               label=r"speed fluctuation $\delta$"),
         Output("crank_speed_before_blow", "rad s-1", "crank speed just before the blow",
-               "ω1⁻"),
+               "ω1⁻", label=r"$\omega_1^-$ before blow"),
         Output("crank_speed_after_blow", "rad s-1", "crank speed just after the blow",
-               "ω1⁺"),
-        Output("crank_speed_jump", "rad s-1", "crank speed change at the blow", "Δω1"),
+               "ω1⁺", label=r"$\omega_1^+$ after blow"),
+        Output("crank_speed_jump", "rad s-1", "crank speed change at the blow", "Δω1",
+               label=r"speed jump $\Delta\omega_1$"),
         Output("tool_impulse", "N m s", "angular impulse of the tool on the rocker about D",
-               "Π"),
+               "Π", label=r"tool impulse $\Pi$"),
         Output("crank_impulse", "N m s", "angular impulse into the crank and flywheel at "
-               "the blow (J_A Delta omega1): the blow's load on the drive", "H_crank"),
+               "the blow (J_A Delta omega1): the blow's load on the drive", "H_crank",
+               label="crank impulse $H$"),
         Output("motor_torque_peak", "N m", "largest |motor torque| over the cycle",
-               "M_peak"),
-        Output("motor_torque_rms", "N m", "RMS motor torque over the cycle", "M_rms"),
+               "M_peak", label=r"peak torque $M_\max$"),
+        Output("motor_torque_rms", "N m", "RMS motor torque over the cycle", "M_rms",
+               label=r"RMS torque $M_\mathrm{rms}$"),
         Output("motor_power_mean", "W", "mean motor power (motor work per cycle / T_c)",
-               "P_mean"),
+               "P_mean", label=r"mean power $\bar P$"),
         Output("blow_energy", "J", "energy per blow: the striker's (rocker's) kinetic "
-               "energy just before it", "E_striker"),
-        Output("blow_loss", "J", "kinetic energy lost at the blow", "ΔE"),
+               "energy just before it", "E_striker", label="blow energy $E$"),
+        Output("blow_loss", "J", "kinetic energy lost at the blow", "ΔE",
+               label=r"blow loss $\Delta E$"),
         Output("energy_to_material", "J", "energy delivered to the worked material "
                "((1 - R^2) m_r omega3^2 / 2; generalised law only: the kinematic law does "
-               "not split its loss, NaN)", "ΔE_tool"),
+               "not split its loss, NaN)", "ΔE_tool",
+               label=r"to material $\Delta E_\mathrm{tool}$"),
         Output("capture_loss", "J", "parasitic loss in the linkage at the blow (the "
                "plastic capture onto the departure branch; generalised law only, NaN under "
-               "the kinematic law)", "ΔE_capture"),
-        Output("blow_rate", "min-1", "blows per minute (60 / T_c)"),
+               "the kinematic law)", "ΔE_capture", label=r"capture loss $\Delta E_\mathrm{cap}$"),
+        Output("blow_rate", "min-1", "blows per minute (60 / T_c)", label="blow rate"),
         Output("blow_efficiency", "1", "share of the motor's work per cycle that reaches "
                "the worked material (generalised law only, NaN under the kinematic law)",
-               "η_blow"),
-        Output("cycle_period", "s", "time between blows in the steady cycle", "T_c"),
-        Output("impact_speed", "m s-1", "rocker tip speed at the blow (|u31- omega1-| l3)"),
+               "η_blow", label=r"blow efficiency $\eta$"),
+        Output("cycle_period", "s", "time between blows in the steady cycle", "T_c",
+               label="cycle period $T_c$"),
+        Output("impact_speed", "m s-1", "rocker tip speed at the blow (|u31- omega1-| l3)",
+               label="impact speed $v$"),
         Output("restitution_kinematic", "1", "kinematic restitution of the linkage "
-               "(u31 after / u31 before the node)", "Rk"),
+               "(u31 after / u31 before the node)", "Rk", label="kinematic restitution $R_k$"),
         Output("restitution_mismatch", "1", "Rk + R: zero where the linkage is matched to "
-               "the material", "Rk + R"),
+               "the material", "Rk + R", label="mismatch $R_k + R$"),
         Output("reduced_inertia_before", "kg m2", "reduced inertia about the crank just "
-               "before the blow", "J⁻"),
+               "before the blow", "J⁻", label="$J^-$ before blow"),
         Output("reduced_inertia_after", "kg m2", "reduced inertia about the crank just "
-               "after the blow", "J⁺"),
+               "after the blow", "J⁺", label="$J^+$ after blow"),
         Output("energy_balance_residual", "1", "(motor work - blow loss) / blow loss over "
                "the steady cycle: gravity and the load are conservative and do no work over "
                "a closed cycle, so this is the integration's and the fixed point's error in "
-               "the cycle's energy balance", diagnostic=True),
+               "the cycle's energy balance", diagnostic=True, label="energy residual"),
         Output("idle_speed", "rad s-1", "the motor's idle speed, given or solved for the "
-               "mean crank speed omega1", "ω_idle", echoes="idle_speed"),
+               "mean crank speed omega1", "ω_idle", echoes="idle_speed",
+               label=r"idle speed $\omega_\mathrm{idle}$"),
         Output("flywheel_sizing", "1", "how the flywheel came about: given; sized for "
                "method.delta_target; or not needed (the crank alone holds the speed "
                "fluctuation under the target, and the flywheel is 0)",
                flags={"undetermined": -1, "given": 0, "sized": 1, "not_needed": 2},
-               undetermined="undetermined"),
+               undetermined="undetermined", label="flywheel sizing"),
         Output("revolutions", "1", "revolutions flown to find the steady state",
-               diagnostic=True, count=True),
+               diagnostic=True, count=True, label="revolutions"),
         Output("n_steps", "1", "integration steps, accepted and rejected", diagnostic=True,
-               count=True),
+               count=True, label="steps"),
         Output("dynamic_force_peak_A", "N", "peak |F14| at the crank pivot A over the "
                "steady cycle, at the actual crank speed and acceleration", "|F14|max",
-               _WINDOWED, on_request=True),
+               _WINDOWED, on_request=True, label="peak $|F_{14}|$ at A"),
         Output("dynamic_force_peak_B", "N", "peak |F21| at the crank pin B over the "
                "steady cycle, at the actual crank speed and acceleration", "|F21|max",
-               _WINDOWED, on_request=True),
+               _WINDOWED, on_request=True, label="peak $|F_{21}|$ at B"),
         Output("dynamic_force_peak_C", "N", "peak |F32| at the coupler-rocker joint C "
                "over the steady cycle, at the actual crank speed and acceleration",
-               "|F32|max", _WINDOWED, on_request=True),
+               "|F32|max", _WINDOWED, on_request=True, label="peak $|F_{32}|$ at C"),
         Output("dynamic_force_peak_D", "N", "peak |F34| at the rocker pivot D over the "
                "steady cycle, at the actual crank speed and acceleration", "|F34|max",
-               _WINDOWED, on_request=True),
+               _WINDOWED, on_request=True, label="peak $|F_{34}|$ at D"),
         Output("flywheel_for_delta", "kg m2", "flywheel that holds the speed fluctuation "
                "at method.delta_target (the exact root of delta(J_f) = target)", "J_f(δ)",
-               on_request=True),
+               on_request=True, label=r"flywheel for $\delta$"),
         Output("flywheel_for_delta_classical", "kg m2", "the same by the classical energy "
-               "method at constant mean speed", "J_f(δ) classical", on_request=True),
+               "method at constant mean speed", "J_f(δ) classical", on_request=True,
+               label=r"flywheel for $\delta$ (classical)"),
     ),
     profiles=(
-        Output("crank_speed", "rad s-1", "crank speed over the steady cycle", "ω1"),
+        Output("crank_speed", "rad s-1", "crank speed over the steady cycle", "ω1",
+               label=r"crank speed $\omega_1$"),
         Output("crank_acceleration", "rad s-2", "crank angular acceleration over the "
-               "steady cycle", "ε1"),
-        Output("motor_torque", "N m", "motor torque over the steady cycle", "M"),
+               "steady cycle", "ε1", label=r"crank acceleration $\varepsilon_1$"),
+        Output("motor_torque", "N m", "motor torque over the steady cycle", "M",
+               label="motor torque $M$"),
         Output("shaft_torque", "N m", "torque the crank shaft delivers to the linkage, "
                "motor torque - J_A epsilon1 (the kinetostatic balancing moment of the "
-               "linkage at the actual speed and acceleration)", "M - J_A ε1"),
+               "linkage at the actual speed and acceleration)", "M - J_A ε1",
+               label="shaft torque"),
     ),
     profile_dim=Quantity("angle_after_blow", "rad", "crank angle after the blow "
-                         "(phi1 - phi1*), over the open cycle", "φ1 - φ1*"),
+                         "(phi1 - phi1*), over the open cycle", "φ1 - φ1*",
+                         label=r"angle after blow $\varphi_1-\varphi_1^*$"),
     profile_coordinate=lambda method: cell_midpoints(method.profile_points, 2.0 * np.pi),
     status=("ok", "not_assemblable", "no_real_synthesis", "degenerate", "no_impact",
             "stalls", "reverses", "singular_inertia", "too_slow", "no_convergence",
