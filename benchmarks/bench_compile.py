@@ -9,7 +9,8 @@ Run: .venv/bin/python benchmarks/bench_compile.py [--rounds N] [EXAMPLE ...]
      .venv/bin/python benchmarks/bench_compile.py --against DIR [--rounds N] [--label LABEL]
      [EXAMPLE ...]
      (a redesign's first run against another checkout's tree DIR, e.g. a `git worktree` of
-     the commit before: cold runs of both, interleaved, on the child processes' CPU time;
+     the commit before: cold runs of both, each followed by a warm run on the cache it
+     left, interleaved, on the child processes' CPU time;
      writes benchmarks/results/compile_against[_LABEL].json, with --label LABEL)
 """
 
@@ -55,12 +56,14 @@ def example_spec(name: str, folder: Path) -> Path:
 
 
 def against(names: list[str], tree: str, rounds: int, label: str = "") -> None:
-    """Cold first runs of this tree and of ``tree``, interleaved, in CPU seconds."""
+    """Cold first runs of this tree and of ``tree``, interleaved, in CPU seconds, each
+    followed by a warm run on the cache it left (the redesign's steady cost)."""
     path = HERE.joinpath("results", "compile_against" + (f"_{label}" if label else "")
                          + ".json")
     result = {"machine": platform.node(), "against": tree, "rounds": rounds, "examples": {}}
     here = str(HERE.parent)
-    print(f"{'example':26s} {'this CPU s':>10s} {'other CPU s':>11s} {'ratio':>6s}")
+    print(f"{'example':26s} {'cold: this':>10s} {'other':>7s} {'ratio':>6s} "
+          f"{'warm: this':>10s} {'other':>7s} {'ratio':>6s}  (CPU s)")
     for name in names:
         if not knows(tree, name):
             result.setdefault("not_in_other", []).append(name)
@@ -69,15 +72,21 @@ def against(names: list[str], tree: str, rounds: int, label: str = "") -> None:
         with tempfile.TemporaryDirectory() as tmp:
             tmp = Path(tmp)
             spec = example_spec(name, tmp)
-            times = {here: [], tree: []}
+            times = {(which, kind): [] for which in (here, tree) for kind in ("cold", "warm")}
             for r in range(rounds):
                 for i, which in enumerate((here, tree) if r % 2 == 0 else (tree, here)):
-                    times[which].append(timed_run(spec, tmp / f"cache{r}{i}", tmp / "a.nc",
-                                                  which)[1])
-        this, other = statistics.median(times[here]), statistics.median(times[tree])
+                    for kind in ("cold", "warm"):
+                        times[which, kind].append(timed_run(
+                            spec, tmp / f"cache{r}{i}", tmp / "a.nc", which)[1])
+        m = {key: statistics.median(values) for key, values in times.items()}
+        this, other = m[here, "cold"], m[tree, "cold"]
+        warm_this, warm_other = m[here, "warm"], m[tree, "warm"]
         result["examples"][name] = {"this_cpu_s": this, "other_cpu_s": other,
-                                    "ratio": this / other}
-        print(f"{name:26s} {this:10.1f} {other:11.1f} {this / other:6.2f}", flush=True)
+                                    "ratio": this / other, "this_warm_cpu_s": warm_this,
+                                    "other_warm_cpu_s": warm_other,
+                                    "warm_ratio": warm_this / warm_other}
+        print(f"{name:26s} {this:10.1f} {other:7.1f} {this / other:6.2f} "
+              f"{warm_this:10.1f} {warm_other:7.1f} {warm_this / warm_other:6.2f}", flush=True)
         path.write_text(json.dumps(result, indent=2))  # what is measured so far, kept
     path.write_text(json.dumps(result, indent=2))
 

@@ -94,12 +94,13 @@ def _log_spaced(values: np.ndarray) -> bool:
 
 
 def _plain_log_axis(axis) -> None:
-    """Log-axis ticks written as numbers (30, not 3x10^1)."""
+    """Log-axis ticks written as numbers as the contours write them (30, not 3x10^1;
+    2,000,000, not 2e+06 beside 500000)."""
     import matplotlib.ticker as ticker
 
-    axis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_major_formatter(ticker.FuncFormatter(lambda v, _: _number(v)))
     axis.set_minor_formatter(ticker.FuncFormatter(
-        lambda v, _: f"{v:g}" if round(v / 10 ** np.floor(np.log10(v))) in (2, 5) else ""))
+        lambda v, _: _number(v) if round(v / 10 ** np.floor(np.log10(v))) in (2, 5) else ""))
 
 
 def _number(value: float) -> str:

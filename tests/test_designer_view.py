@@ -240,3 +240,29 @@ def test_the_spec_an_atlas_records_runs_again_as_it_is(name):
         assert "rotor_inertia_ratio" not in recorded["fixed"]  # no rotor on this grid
     if recorded["method"].get("integrator") == "auto":
         assert not {"rtol", "atol", "dt"} & set(recorded["method"])
+
+
+def test_a_log_colour_bar_writes_every_tick_as_the_contours_do(tmp_path):
+    """Peak forces over four decades of crank speed: a log colour scale whose ticks read as
+    the contour labels read (1,000,000), never 1e+06 beside 500000; each tick's text is the
+    value matplotlib placed there."""
+    import matplotlib.pyplot as plt
+
+    from sweep.charts import design_figure
+
+    lf = ('mechanism = "linkage_forces"\n[grid]\nomega1 = [10.0, 100.0, 1000.0, 3000.0]\n'
+          'tilt = [0.0, 0.5]\n[method]\nprofile_points = 8\n')
+    ds = xr.open_dataset(atlas(tmp_path, lf, "wide.nc"))
+    assert float(ds.force_peak_D.max() / ds.force_peak_D.min()) > 1e4  # a log scale
+    fig = design_figure(ds, "omega1", "tilt", "force_peak_D")
+    fig.draw_without_rendering()
+    bar = next(ax for ax in fig.axes if ax.get_label() == "<colorbar>")
+    shown = [t for t in bar.yaxis.get_majorticklabels() + bar.yaxis.get_minorticklabels()
+             if t.get_text() and bar.get_ylim()[0] <= t.get_position()[1] <= bar.get_ylim()[1]]
+    texts = [t.get_text() for t in shown]
+    assert any(float(t.replace(",", "")) >= 1e6 for t in texts), texts
+    for t in shown:
+        assert re.fullmatch(r"\d{1,3}(,\d{3})*|\d+(\.\d+)?", t.get_text()), texts
+        assert float(t.get_text().replace(",", "")) == pytest.approx(t.get_position()[1],
+                                                                      rel=1e-12)
+    plt.close(fig)
