@@ -113,7 +113,10 @@ def test_dop853_or_rk4_compiled_in_or_not_dopri5_takes_the_same_steps():
     assert np.all(dop853[stepped, ROW.steps] < dopri5[stepped, ROW.steps] / 2)
 
 
-@pytest.mark.parametrize("model, tool", [("rotor", "rotor_stop"), ("rigid", "lab_window")])
+# the blade's fullest entry point is this test's alone: the whole suite compiles it
+@pytest.mark.parametrize("model, tool", [("rotor", "rotor_stop"),
+                                         pytest.param("rigid", "lab_window",
+                                                      marks=pytest.mark.slow)])
 def test_the_leanest_entry_point_gives_the_bits_of_the_fullest_at_one_start(model, tool):
     """An entry point without the search for other starts' cycles and without auto's second
     stage (so with the one-stage calls inlined) gives, at one start and no second stage
