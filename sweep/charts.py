@@ -440,6 +440,8 @@ def _label_contours(ax, lines) -> None:
 def _thin_labels(fig) -> None:
     """Drop a contour label that overlaps one kept (or an axes' edge), unless it is its
     level's last one: every level drawn keeps a label, none sits on another."""
+    if not any(getattr(ax, "contour_labels", []) for ax in fig.axes):
+        return  # nothing to thin: spare the layout pass the extents need
     fig.draw_without_rendering()
     renderer = fig._get_renderer()
     for ax in fig.axes:
