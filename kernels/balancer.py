@@ -30,7 +30,6 @@ SI_OUTPUTS = ("spring_stiffness", "shaft_stiffness", "moment_peak_free",
               "moment_peak_balanced")
 
 
-
 DECLARATION = Mechanism(
     name="spring_balancer",
     title="Leaf-spring balancer on a four-bar: steady state by Fourier series",

@@ -70,8 +70,6 @@ def _rules(given: dict) -> str | None:
     return None
 
 
-
-
 DECLARATION = Mechanism(
     name="crank_rocker",
     title="Crank-rocker impact four-bar: synthesis and kinematic restitution",

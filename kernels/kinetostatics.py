@@ -84,8 +84,6 @@ def _rules(given: dict) -> str | None:
     return None
 
 
-
-
 DECLARATION = Mechanism(
     name="linkage_forces",
     title="Kinetostatics of the impact four-bar and GUIM-1's additional rocker",

@@ -66,7 +66,6 @@ def _rules(given: dict) -> str | None:
     return None
 
 
-
 #: the outputs of the steady cycle's loads (kernels/pendulum/histories.py): they need the
 #: striker's mass
 LOAD_OUTPUTS = ("hinge_force_peak", "hinge_impulse", "drive_torque_peak", "drive_torque_mean",

@@ -29,7 +29,6 @@ from kernels.extrema import cell_midpoints, clustered_points, peak_search
 from kernels.fourbar import CHANGE_POINT_B, crank_turns_fully, vector_kinematics
 
 
-
 #: the profiles' coordinate: the crank angle over the 4 pi cycle, at cell midpoints
 CYCLE_ANGLE = Quantity("crank_angle", "rad", "crank angle (phi1) over the 4 pi cycle", "φ1",
                        label=r"crank angle $\varphi_1$")

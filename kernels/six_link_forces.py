@@ -66,7 +66,6 @@ JOINTS = (("A", "F16", "base force on the crank", "crank"),
           ("E", "F56", "base force on the rocker", "rocker"))
 
 
-
 def _link_quantities(i: int) -> tuple:
     """Mass, centroid (along, across) and centroidal inertia of link i, named as
     linkage_forces names them."""

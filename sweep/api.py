@@ -108,6 +108,9 @@ def as_sweep(spec: Sweep | Mapping | str | os.PathLike) -> Sweep:
         return spec
     if isinstance(spec, Mapping):
         return Sweep.from_dict(spec)
+    if isinstance(spec, str) and "\n" in spec:
+        raise UserError("spec: TOML text, not the path of a file: pass "
+                        "sweep.Sweep.from_text(text), or write it to a file")
     if isinstance(spec, (str, os.PathLike)):
         return Sweep.from_toml(spec)
     raise UserError(f"spec: a Sweep, a dict or the path of a TOML file, not "

@@ -104,6 +104,17 @@ def test_bad_input_is_one_user_error_naming_the_field(call, field):
     assert message.startswith(field) and "\n" not in message
 
 
+def test_a_specs_text_where_a_path_belongs_says_what_takes_text():
+    """A TOML text passed to run is not looked up as a file name (which echoed the whole
+    text as the missing file's name): the error says what takes text."""
+    text = 'mechanism = "crank_rocker"\n[grid]\nR = [0.3]\nlargest_link = [2.5]\n'
+    with pytest.raises(sweep.UserError, match=r"^spec: TOML text, not the path of a file: "
+                                              r"pass sweep\.Sweep\.from_text\(text\)"):
+        sweep.run(text)
+    assert sweep.Sweep.from_text(text).spec == sweep.Sweep.from_dict(
+        {"mechanism": "crank_rocker", "grid": {"R": [0.3], "largest_link": [2.5]}}).spec
+
+
 def test_an_atlas_too_large_for_memory_asks_for_a_path(monkeypatch):
     monkeypatch.setattr(sweep.api, "IN_MEMORY_LIMIT", 1000)
     with pytest.raises(sweep.UserError, match="^path: the atlas would take"):

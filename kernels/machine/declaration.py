@@ -49,8 +49,6 @@ def _rules(given: dict) -> str | None:
     return None
 
 
-
-
 DECLARATION = Mechanism(
     name="impact_machine",
     title="Crank-driven impact machine: energy per blow, motor, flywheel",
