@@ -47,6 +47,17 @@ def timed_run(spec: Path, cache: Path, out: Path, tree: str | None = None) -> tu
     return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 
 
+def provenance() -> dict:
+    """What a record needs beside its numbers: the machine, the commit, the day, the load."""
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=HERE, text=True,
+                            capture_output=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=HERE,
+                           text=True, capture_output=True).stdout.strip()
+    return {"machine": platform.node(), "cores": os.cpu_count(),
+            "commit": commit + ("+changes" if dirty else ""),
+            "date": time.strftime("%Y-%m-%d %H:%M"), "load_before": os.getloadavg()[0]}
+
+
 def example_spec(name: str, folder: Path) -> Path:
     """The built-in example's spec, written into ``folder``."""
     spec = folder / "spec.toml"
@@ -60,7 +71,7 @@ def against(names: list[str], tree: str, rounds: int, label: str = "") -> None:
     followed by a warm run on the cache it left (the redesign's steady cost)."""
     path = HERE.joinpath("results", "compile_against" + (f"_{label}" if label else "")
                          + ".json")
-    result = {"machine": platform.node(), "against": tree, "rounds": rounds, "examples": {}}
+    result = {**provenance(), "against": tree, "rounds": rounds, "examples": {}}
     here = str(HERE.parent)
     print(f"{'example':26s} {'cold: this':>10s} {'other':>7s} {'ratio':>6s} "
           f"{'warm: this':>10s} {'other':>7s} {'ratio':>6s}  (CPU s)")
@@ -87,8 +98,8 @@ def against(names: list[str], tree: str, rounds: int, label: str = "") -> None:
                                     "warm_ratio": warm_this / warm_other}
         print(f"{name:26s} {this:10.1f} {other:7.1f} {this / other:6.2f} "
               f"{warm_this:10.1f} {warm_other:7.1f} {warm_this / warm_other:6.2f}", flush=True)
+        result["load_after"] = os.getloadavg()[0]
         path.write_text(json.dumps(result, indent=2))  # what is measured so far, kept
-    path.write_text(json.dumps(result, indent=2))
 
 
 def knows(tree: str, name: str) -> bool:
@@ -115,10 +126,11 @@ def main():
     path = HERE.joinpath("results", "compile.json")
     # examples measured before and not now keep their record
     result = json.loads(path.read_text()) if path.exists() else {}
-    result["machine"] = platform.node()
+    result.pop("machine", None)  # each example's record says where and when it was made
     print(f"{'example':24s} {'cold s':>8s} {'warm s':>8s} {'cold - warm':>12s} "
           f"{'CPU s: cold - warm':>19s}")
     for name in names:
+        measured = provenance()
         with tempfile.TemporaryDirectory() as tmp:
             tmp = Path(tmp)
             spec = example_spec(name, tmp)
@@ -135,7 +147,8 @@ def main():
         # time is not the run's
         result[name] = {"cold_s": c, "warm_s": w, "difference_s": c - w,
                         "cold_cpu_s": cc, "warm_cpu_s": wc, "difference_cpu_s": cc - wc,
-                        "rounds": args.rounds}
+                        "rounds": args.rounds, **measured,
+                        "load_after": os.getloadavg()[0]}
         print(f"{name:24s} {c:8.1f} {w:8.1f} {c - w:12.1f} {cc - wc:19.1f}", flush=True)
     path.write_text(json.dumps(result, indent=2))
 

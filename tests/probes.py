@@ -17,7 +17,7 @@ from kernels.impact.impact_map import SPEED_EPS, make_impact_map
 from kernels.impact.tangent import DPSI, DW, make_tracker
 from kernels.impact.outcomes import FLIGHT_EVENT, Settings
 from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5, METHOD_RK4, make_stepper
-from kernels.pendulum import blade, models, tools
+from kernels.pendulum import blade, blade_geometry, models, tools
 from tests.stop_tool import relative_stop
 
 MODELS = {"paper": models.PAPER, "rigid": models.RIGID, "rotor": models.ROTOR}
@@ -204,7 +204,7 @@ def section_jacobian(model: str, tool: str):
                     dpsi += delta
                 phi, t2 = rotor_angle(t, y), t
                 if on_blade:
-                    phi = data[3] - blade.beta(psi, data[2])
+                    phi = data[3] - blade_geometry.beta(psi, data[2])
                     if driven:
                         t2 = phi
                 t2, y2 = compose(t2, phi, w, psi, dpsi)

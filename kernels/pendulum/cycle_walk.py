@@ -35,7 +35,8 @@ from kernels.cache import module_level
 from kernels.impact.impact_map import MAX_CONTACTS_PER_SECTION, make_contact, make_restitute
 from kernels.impact.outcomes import FLIGHT_EVENT
 from kernels.pendulum import histories
-from kernels.pendulum.blade import blade_section_start, h_ratio, h_slope
+from kernels.pendulum.blade import blade_section_start
+from kernels.pendulum.blade_geometry import h_ratio, h_slope
 from kernels.pendulum.histories import (CYCLE_ANGLE, CYCLE_TIME, CYCLE_WORK, HINGE_IMPULSE,
                                         IMPACT_LOSS, MEAN_TORQUE, PEAK_HINGE, PEAK_TORQUE,
                                         Sample, hinge_and_moment, impact_impulses, make_walk)

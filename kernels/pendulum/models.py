@@ -39,6 +39,14 @@ Model = namedtuple("Model", [
     "exact", "exact_length", "speed_bound"], defaults=(None, None, None))
 
 
+def state_slot(index):
+    """A reader of one coordinate of a model's state, ``read(y) -> y[index]``."""
+    @njit(**INLINE_OPTIONS)
+    def read(y):
+        return y[index]
+
+    return read
+
 
 # ---------------------------------------------------------------- constant rotor speed
 
@@ -114,16 +122,6 @@ def driven_rotor_speed(y):
 
 
 @njit(**INLINE_OPTIONS)
-def driven_psi(y):
-    return y[0]
-
-
-@njit(**INLINE_OPTIONS)
-def driven_dpsi(y):
-    return y[1]
-
-
-@njit(**INLINE_OPTIONS)
 def driven_compose(t, phi1, w, psi, dpsi):
     """The state with these coordinates: the rotor angle is the time."""
     return phi1, (psi, dpsi)
@@ -153,11 +151,16 @@ def driven_model(rhs, critical_speed, jacobian, swing, exact=None, exact_length=
     def accelerations(t, y, p):
         return 0.0, rhs(y, p)[1]
 
-    return Model(rhs, relative_scales, driven_monitor, accelerations, driven_response,
-                 driven_rotor_angle, driven_rotor_speed, driven_psi, driven_dpsi,
-                 driven_compose, critical_speed, driven_shift, True, jacobian,
-                 driven_response_slope, driven_tangent_state, driven_tangent_coordinates,
-                 swing, driven_starting_speed, exact, exact_length, speed_bound)
+    return Model(rhs=rhs, scales=relative_scales, monitor=driven_monitor,
+                 accelerations=accelerations, response=driven_response,
+                 rotor_angle=driven_rotor_angle, rotor_speed=driven_rotor_speed,
+                 psi=state_slot(0), dpsi=state_slot(1), compose=driven_compose,
+                 critical_speed=critical_speed, shift=driven_shift, driven=True,
+                 jacobian=jacobian, response_slope=driven_response_slope,
+                 tangent_state=driven_tangent_state,
+                 tangent_coordinates=driven_tangent_coordinates, swing=swing,
+                 starting_speed=driven_starting_speed, exact=exact,
+                 exact_length=exact_length, speed_bound=speed_bound)
 
 
 # ---------------------------------------------------------------- rotor of finite inertia
@@ -272,21 +275,6 @@ def rotor_rotor_angle(t, y):
 
 
 @njit(**INLINE_OPTIONS)
-def rotor_rotor_speed(y):
-    return y[1]
-
-
-@njit(**INLINE_OPTIONS)
-def rotor_psi(y):
-    return y[2]
-
-
-@njit(**INLINE_OPTIONS)
-def rotor_dpsi(y):
-    return y[3]
-
-
-@njit(**INLINE_OPTIONS)
 def rotor_compose(t, phi1, w, psi, dpsi):
     return t, (phi1, w, psi, dpsi)
 
@@ -315,11 +303,14 @@ def rotor_starting_speed(p):
     return idle
 
 
-ROTOR = Model(rotor_rhs, rotor_scales, rotor_monitor, rotor_model_accelerations,
-              rotor_response, rotor_rotor_angle, rotor_rotor_speed, rotor_psi, rotor_dpsi,
-              rotor_compose, no_critical_speed, rotor_shift, False, rotor_jacobian,
-              rotor_response_slope, rotor_tangent_state, rotor_tangent_coordinates,
-              no_swing, rotor_starting_speed)
+ROTOR = Model(rhs=rotor_rhs, scales=rotor_scales, monitor=rotor_monitor,
+              accelerations=rotor_model_accelerations, response=rotor_response,
+              rotor_angle=rotor_rotor_angle, rotor_speed=state_slot(1), psi=state_slot(2),
+              dpsi=state_slot(3), compose=rotor_compose, critical_speed=no_critical_speed,
+              shift=rotor_shift, driven=False, jacobian=rotor_jacobian,
+              response_slope=rotor_response_slope, tangent_state=rotor_tangent_state,
+              tangent_coordinates=rotor_tangent_coordinates, swing=no_swing,
+              starting_speed=rotor_starting_speed)
 
 
 @njit(**KERNEL_OPTIONS)
