@@ -62,7 +62,14 @@ def timed(command: list[str], cwd: Path, env: dict | None = None) -> dict:
             "compiled_during_tests": (Path(compiled.group(2)).read_text().splitlines()
                                       if compiled and Path(compiled.group(2)).is_file()
                                       else []),
-            "load_before": load_before, "load_after": load()}
+            "load_before": load_before, "load_after": load(),
+            # pytest's --durations report: where the tests' own time goes
+            "slowest": [f"{m.group(1)} s {m.group(2)} {m.group(3)}" for m in re.finditer(
+                r"^\s*([\d.]+)s (call|setup|teardown)\s+(\S+)", text, re.MULTILINE)]}
+
+
+#: the slowest tests, reported by pytest with each run
+DURATIONS = "--durations=25"
 
 
 def fresh_clone(folder: Path) -> Path:
@@ -121,13 +128,14 @@ def main() -> None:
                "measured": time.strftime("%Y-%m-%d")}
     with tempfile.TemporaryDirectory() as tmp:
         clone = fresh_clone(Path(tmp))
-        results["fast_cold"] = timed(["./tasks", "test", "--fast"], clone)
-        results["fast_warm"] = timed(["./tasks", "test", "--fast"], clone)
+        results["fast_cold"] = timed(["./tasks", "test", "--fast", DURATIONS], clone)
+        results["fast_warm"] = timed(["./tasks", "test", "--fast", DURATIONS], clone)
         print(json.dumps(results, indent=1), flush=True)
     path = HERE / "results" / "test_loop.json"
     if not args.skip_full:
         with tempfile.TemporaryDirectory() as tmp:
-            results["full_cold"] = timed(["./tasks", "test"], fresh_clone(Path(tmp)))
+            results["full_cold"] = timed(["./tasks", "test", DURATIONS],
+                                         fresh_clone(Path(tmp)))
     elif path.exists() and "full_cold" in (earlier := json.loads(path.read_text())):
         # the whole suite's last measurement is kept, with the commit it measured
         results["full_cold"] = {"commit": earlier["commit"], **earlier["full_cold"]}

@@ -125,6 +125,48 @@ def test_each_package_imports_without_cycles(package):
     assert import_cycles(package) == {}
 
 
+def owned_modules(architecture: str) -> set[str]:
+    """The module paths that docs/architecture.md's table "Who owns what" names: a row's
+    first cell holds paths (``kernels/pendulum/tools.py``), file names of the last path's
+    folder (``blade.py``), or a folder (``kernels/impact/``: its ``__init__.py``) whose
+    other modules the second cell names (``runge_kutta``)."""
+    table = architecture.split("## Who owns what", 1)[1].split("\n## ", 1)[0]
+    named = set()
+    for row in table.splitlines():
+        cells = row.split("|")
+        if len(cells) < 4 or not cells[1].strip().startswith("`"):
+            continue
+        folder = ""
+        for token in re.findall(r"`([^`]+)`", cells[1]):
+            if token.endswith("/"):
+                named |= {token + stem + ".py"
+                          for stem in ["__init__", *re.findall(r"`(\w+)`", cells[2])]}
+            elif "/" in token:
+                folder = token.rsplit("/", 1)[0] + "/"
+                named.add(token)
+            else:
+                named.add(folder + token)
+    return named
+
+
+def test_the_ownership_table_names_every_module():
+    """docs/architecture.md's table names every module of both packages (their
+    ``__init__.py`` files that define nothing apart). A module added without its row, or a
+    row left behind by a module that went, fails it."""
+    modules = {str(p.relative_to(ROOT)) for package in ("sweep", "kernels")
+               for p in (ROOT / package).rglob("*.py")
+               if p.name != "__init__.py" or len(p.read_text().splitlines()) > 10}
+    named = owned_modules((ROOT / "docs" / "architecture.md").read_text())
+    assert modules - named == set(), "modules without a row"
+    assert {m for m in named if m.endswith(".py")} - modules == set(), "rows without a module"
+    planted = ("## Who owns what\n| module | owns |\n|---|---|\n"
+               "| `kernels/pendulum/tools.py`, `blade.py` | tools |\n"
+               "| `kernels/impact/` | the core: `flight`, `events` |\n")
+    assert owned_modules(planted) == {"kernels/pendulum/tools.py", "kernels/pendulum/blade.py",
+                                      "kernels/impact/__init__.py", "kernels/impact/flight.py",
+                                      "kernels/impact/events.py"}
+
+
 def test_a_toy_mechanism_needs_one_declaration_one_kernel_and_one_registry_line(
         tmp_path, monkeypatch, capsys):
     monkeypatch.setitem(registry.MECHANISMS, "toy", "tests.toy_mechanism")
