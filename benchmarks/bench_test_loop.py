@@ -134,8 +134,8 @@ def main() -> None:
     path = HERE / "results" / "test_loop.json"
     if not args.skip_full:
         with tempfile.TemporaryDirectory() as tmp:
-            results["full_cold"] = timed(["./tasks", "test", DURATIONS],
-                                         fresh_clone(Path(tmp)))
+            results["full_cold"] = {"commit": head, **timed(["./tasks", "test", DURATIONS],
+                                                            fresh_clone(Path(tmp)))}
     elif path.exists() and "full_cold" in (earlier := json.loads(path.read_text())):
         # the whole suite's last measurement is kept, with the commit it measured
         results["full_cold"] = {"commit": earlier["commit"], **earlier["full_cold"]}

@@ -121,6 +121,9 @@ def driven_rotor_speed(y):
     return 1.0
 
 
+driven_psi, driven_dpsi = state_slot(0), state_slot(1)
+
+
 @njit(**INLINE_OPTIONS)
 def driven_compose(t, phi1, w, psi, dpsi):
     """The state with these coordinates: the rotor angle is the time."""
@@ -154,7 +157,7 @@ def driven_model(rhs, critical_speed, jacobian, swing, exact=None, exact_length=
     return Model(rhs=rhs, scales=relative_scales, monitor=driven_monitor,
                  accelerations=accelerations, response=driven_response,
                  rotor_angle=driven_rotor_angle, rotor_speed=driven_rotor_speed,
-                 psi=state_slot(0), dpsi=state_slot(1), compose=driven_compose,
+                 psi=driven_psi, dpsi=driven_dpsi, compose=driven_compose,
                  critical_speed=critical_speed, shift=driven_shift, driven=True,
                  jacobian=jacobian, response_slope=driven_response_slope,
                  tangent_state=driven_tangent_state,
@@ -274,6 +277,9 @@ def rotor_rotor_angle(t, y):
     return y[0]
 
 
+rotor_rotor_speed, rotor_psi, rotor_dpsi = state_slot(1), state_slot(2), state_slot(3)
+
+
 @njit(**INLINE_OPTIONS)
 def rotor_compose(t, phi1, w, psi, dpsi):
     return t, (phi1, w, psi, dpsi)
@@ -305,8 +311,8 @@ def rotor_starting_speed(p):
 
 ROTOR = Model(rhs=rotor_rhs, scales=rotor_scales, monitor=rotor_monitor,
               accelerations=rotor_model_accelerations, response=rotor_response,
-              rotor_angle=rotor_rotor_angle, rotor_speed=state_slot(1), psi=state_slot(2),
-              dpsi=state_slot(3), compose=rotor_compose, critical_speed=no_critical_speed,
+              rotor_angle=rotor_rotor_angle, rotor_speed=rotor_rotor_speed, psi=rotor_psi,
+              dpsi=rotor_dpsi, compose=rotor_compose, critical_speed=no_critical_speed,
               shift=rotor_shift, driven=False, jacobian=rotor_jacobian,
               response_slope=rotor_response_slope, tangent_state=rotor_tangent_state,
               tangent_coordinates=rotor_tangent_coordinates, swing=no_swing,
