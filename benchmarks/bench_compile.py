@@ -100,6 +100,7 @@ def against(names: list[str], tree: str, rounds: int, label: str = "") -> None:
               f"{warm_this:10.1f} {warm_other:7.1f} {warm_this / warm_other:6.2f}", flush=True)
         result["load_after"] = os.getloadavg()[0]
         path.write_text(json.dumps(result, indent=2))  # what is measured so far, kept
+    path.write_text(json.dumps(result, indent=2))  # also where no example was measured
 
 
 def knows(tree: str, name: str) -> bool:
