@@ -2,7 +2,9 @@
 cache (kernels/cache.py), so a first sweep waits for the compiler and every later one
 starts at once. Here the compiles are jobs run in processes of their own, as many at a time
 as there are cores (a compile holds its process's interpreter: threads would not overlap),
-each filling the cache that the sweeps, and the other processes, then load.
+each filling the cache that the sweeps, and the other processes, then load. The jobs of one
+system (one mechanism, one value of each parameter that compiles apart) run in one process,
+where the parts their entry points share are compiled once (``Job.together``).
 
 - ``sweep warmup [MECHANISM ...]`` compiles what the built-in examples and each pendulum
   system under the default method need (``mechanism_jobs``), once per installation;
@@ -29,19 +31,57 @@ from sweep.errors import UserError
 @dataclass(frozen=True)
 class Job:
     """One compile: ``function`` ("module:name") called with ``arguments`` in a process of
-    its own; ``name`` says what it compiles."""
+    its own; ``name`` says what it compiles. Jobs with the same ``together`` key (not
+    empty: ``together``) run in one process, one after the other: numba keeps the inner
+    functions of a kernel (those it does not cache on disk) in the memory of the process
+    that compiled them, so the entry points of one system compile them once there."""
 
     name: str
     function: str
     arguments: tuple = ()
+    together: str = ""
 
 
-def run_job(job: Job) -> tuple[str, float]:
-    """Run a job here: (its name, the CPU seconds it took)."""
-    module, name = job.function.split(":")
-    started = time.process_time()
-    getattr(importlib.import_module(module), name)(*job.arguments)
-    return job.name, time.process_time() - started
+def together(mechanism: str, **values) -> str:
+    """The key of the jobs that compile the same code of a mechanism, by the values of its
+    parameters that run code of their own (Quantity.compiles_apart)."""
+    return " ".join([mechanism] + [f"{name}={values[name]}" for name in sorted(values)])
+
+
+def spec_together(text: str) -> str:
+    """The ``together`` key of a spec (TOML text) whose parameters that compile apart
+    each take one value (given in [fixed] or as a one-value grid, else their default);
+    empty where one takes several."""
+    import tomllib
+
+    from sweep import registry
+
+    given = tomllib.loads(text)
+    mechanism = given["mechanism"]
+    values = {}
+    for quantity in registry.get(mechanism).declaration.parameters:
+        if not quantity.compiles_apart:
+            continue
+        value = given.get("fixed", {}).get(quantity.name,
+                                          given.get("grid", {}).get(quantity.name,
+                                                                    quantity.default))
+        if isinstance(value, list):
+            if len(value) != 1:
+                return ""
+            value = value[0]
+        values[quantity.name] = value
+    return together(mechanism, **values)
+
+
+def run_jobs_here(jobs: Sequence[Job]) -> list[tuple[str, float]]:
+    """Run jobs here, one after the other: (the name, the CPU seconds) of each."""
+    times = []
+    for job in jobs:
+        module, name = job.function.split(":")
+        started = time.process_time()
+        getattr(importlib.import_module(module), name)(*job.arguments)
+        times.append((job.name, time.process_time() - started))
+    return times
 
 
 def cores() -> int:
@@ -55,27 +95,45 @@ def cores() -> int:
 def run_jobs(jobs: Sequence[Job], workers: int | None = None,
              done: Callable[[str, float], None] | None = None) -> dict[str, float]:
     """Run the jobs in at most ``workers`` processes (default: the cores), the first ones
-    first (put the longest first); ``done(name, cpu_seconds)`` after each. Returns the
-    CPU seconds of each job by name. A job that fails raises its error here, after the
-    others finished."""
-    workers = max(1, min(workers or cores(), len(jobs)))
+    first (put the longest first), those with one ``together`` key in one process where
+    the first of them comes; ``done(name, cpu_seconds)`` after each. Returns the CPU
+    seconds of each job by name. A job that fails raises its error here, after the others
+    finished."""
+    tasks = _tasks(jobs)
+    workers = max(1, min(workers or cores(), len(tasks)))
     times: dict[str, float] = {}
     failure = None
     # spawn: a fork of a process that has numba's threads or compiler state is not safe
     with cf.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
                                 initializer=_quiet_worker) as pool:
-        for future in cf.as_completed([pool.submit(run_job, job) for job in jobs]):
+        for future in cf.as_completed([pool.submit(run_jobs_here, task) for task in tasks]):
             try:
-                name, seconds = future.result()
+                task_times = future.result()
             except Exception as err:  # noqa: BLE001 (reported once all have ended)
                 failure = failure or err
                 continue
-            times[name] = seconds
-            if done is not None:
-                done(name, seconds)
+            for name, seconds in task_times:
+                times[name] = seconds
+                if done is not None:
+                    done(name, seconds)
     if failure is not None:
         raise failure
     return times
+
+
+def _tasks(jobs: Sequence[Job]) -> list[list[Job]]:
+    """The jobs as the processes' tasks: each job alone, but those of one ``together`` key
+    in one task, where the first of them comes."""
+    tasks: list[list[Job]] = []
+    keyed: dict[str, list[Job]] = {}
+    for job in jobs:
+        if job.together in keyed:
+            keyed[job.together].append(job)
+            continue
+        tasks.append([job])
+        if job.together:
+            keyed[job.together] = tasks[-1]
+    return tasks
 
 
 def _quiet_worker() -> None:
@@ -102,8 +160,9 @@ def example_jobs(names: Iterable[str]) -> list[Job]:
     """A job per built-in example: what its first run compiles."""
     from sweep import example_specs
 
-    return [Job(f"example {name}", "sweep.warmup:compile_spec", (example_specs.text(name),))
-            for name in names]
+    texts = {name: example_specs.text(name) for name in names}
+    return [Job(f"example {name}", "sweep.warmup:compile_spec", (text,), spec_together(text))
+            for name, text in texts.items()]
 
 
 def pendulum_system_jobs() -> list[Job]:
@@ -113,7 +172,8 @@ def pendulum_system_jobs() -> list[Job]:
 
     return [Job(f"rotary_pendulum {s.model} on {s.tool}", "sweep.warmup:compile_spec",
                 (f'mechanism = "rotary_pendulum"\n[fixed]\nmodel = "{s.model}"\n'
-                 f'tool = "{s.tool}"\nkappa = 1.2\n',))
+                 f'tool = "{s.tool}"\nkappa = 1.2\n',),
+                together("rotary_pendulum", model=s.model, tool=s.tool))
             for s in SYSTEMS]
 
 
@@ -121,8 +181,9 @@ def machine_full_job() -> Job:
     """The impact machine's full block (kernels/impact_machine.py: a crank speed to size
     the motor for, profiles, force peaks, flywheels for delta), which its example, asking
     none of them, does not compile: a chained machine's first run needs it."""
-    return Job("impact_machine at a given crank speed", "sweep.warmup:compile_spec",
-               ('mechanism = "impact_machine"\n[grid]\nomega1 = [20.0]\n',))
+    text = 'mechanism = "impact_machine"\n[grid]\nomega1 = [20.0]\n'
+    return Job("impact_machine at a given crank speed", "sweep.warmup:compile_spec", (text,),
+               spec_together(text))
 
 
 def _pendulum_loads(model: str, tool: str) -> str:
@@ -154,7 +215,7 @@ ON_REQUEST = {
 def on_request_jobs(mechanisms: Iterable[str], leave_out: Iterable[str] = ()) -> list[Job]:
     """A job per ON_REQUEST spec of these mechanisms, but those labelled in leave_out."""
     left = set(leave_out)
-    return [Job(f"{name} {label}", "sweep.warmup:compile_spec", (text,))
+    return [Job(f"{name} {label}", "sweep.warmup:compile_spec", (text,), spec_together(text))
             for name in mechanisms for label, text in ON_REQUEST.get(name, {}).items()
             if label not in left]
 

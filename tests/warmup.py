@@ -2,7 +2,8 @@
 in parallel processes, each entry point once (sweep/warmup.py): the kernels the tests run
 and the tests' own probes. The tests then load them from the cache, on every worker.
 
-A job is a function here called with its arguments in a process of its own: every built-in
+A job is a function here called with its arguments in a process of its own (those of one
+pendulum system in one process, which compiles the parts they share once): every built-in
 example, the pendulum's entry points of the fast loop (``FAST_ENTRY_POINTS``) and those the
 whole suite adds (``SLOW_ENTRY_POINTS``), and the tests' probes. A warm-up is skipped where
 nothing it compiles from has changed since the last one (``stamp``). After the tests, the
@@ -19,7 +20,9 @@ from pathlib import Path
 
 import numba
 
-from sweep.warmup import Job, cores, example_jobs, machine_full_job, on_request_jobs, run_jobs
+from kernels.pendulum.table import TOOLS
+from sweep.warmup import (Job, cores, example_jobs, machine_full_job, on_request_jobs,
+                          run_jobs, together)
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -128,12 +131,14 @@ SLOW_ENTRY_POINTS = (
 def _entry_jobs(entries):
     return [Job(f"{model} on {tool} by {method}" + (" tangent" if tangent else "")
                 + (" two stages" if two else "") + (f" {starts} starts" if starts > 1 else ""),
-                "tests.warmup:pendulum", (model, tool, method, tangent, two, starts))
+                "tests.warmup:pendulum", (model, tool, method, tangent, two, starts),
+                together("rotary_pendulum", model=model, tool=tool))
             for model, tool, method, tangent, two, starts in entries]
 
 
 def _probe_jobs():
-    return ([Job(f"flight probe {m} on {t}", "tests.warmup:flight_probe", (m, t))
+    return ([Job(f"flight probe {m} on {t}", "tests.warmup:flight_probe", (m, t),
+                 together("rotary_pendulum", model=m, tool=t) if t in TOOLS else "")
              for m in ("paper", "rigid", "rotor")
              for t in ("rotor_stop", "lab_window", "relative_stop")]
             + [Job(f"fixed steps probe {m}", "tests.warmup:fixed_steps_probe", (m,))

@@ -4,6 +4,7 @@ sections (minimal polynomial extrapolation) and Broyden's quasi-Newton steps aft
 the impacts from rest counted on the map's linearisation past a jump (docs/impact_core.md,
 H13)."""
 
+import functools
 import math
 from collections import namedtuple
 
@@ -134,6 +135,7 @@ def aitken_jump(history, last):
             aitken(history[last - 2, 1], history[last - 1, 1], history[last, 1]))
 
 
+@functools.cache
 def make_accelerators(c):
     """The transient's jumps on a Contact with a 2-D section state: ``land`` moves the
     sequence to a section state, ``fixed_point`` jumps to the fixed point of the affine map

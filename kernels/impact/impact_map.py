@@ -47,6 +47,7 @@ refined cycle, the whole sequence:
    stops there as that cycle.
 """
 
+import functools
 import math
 from collections import namedtuple
 
@@ -167,7 +168,11 @@ def make_impact_map(c, jump_early, stability=False, known_cycles=True, second_st
     make_timed_flight);
     without ``known_cycles`` a sequence never looks for the cycles of other starts (a
     single start: their search is not compiled in); without ``second_stage`` the sequence
-    from a state (``settle``) is called only by ``steady`` and inlined into it."""
+    from a state (``settle``) is called only by ``steady`` and inlined into it. The parts
+    that do not depend on the starts and the stages (the law, a contact, a section, the
+    cycle, the transient, the tangent's tracker) are made once per Contact and options
+    (functools.cache), so that a process making several entry points of one system
+    compiles them once: numba keeps an inner function's code in its process only."""
     tracker = make_tracker(c, 2 if c.model.driven else 4, methods) if stability else NO_TRACKER
     restitute = make_restitute(c)
     contact = make_contact(c, restitute)
@@ -179,6 +184,7 @@ def make_impact_map(c, jump_early, stability=False, known_cycles=True, second_st
                   restitute=restitute)
 
 
+@functools.cache
 def make_restitute(c):
     """Newton's law of a Contact: ``restitute(t, y, data, p, r) -> (t, y)``."""
     jacobian, response, compose = c.jacobian, c.model.response, c.model.compose
@@ -199,6 +205,7 @@ def make_restitute(c):
     return restitute
 
 
+@functools.cache
 def make_contact(c, restitute):
     """A contact of a Contact, from its approach to where it opens or its slide ends."""
     normal_speed, normal_acceleration = c.normal_speed, c.normal_acceleration
@@ -229,6 +236,7 @@ def make_contact(c, restitute):
     return contact
 
 
+@functools.cache
 def make_section(c, contact, tracker):
     """One section of a Contact: its contacts and flights up to the next section."""
     _, track_flight, track_law, _ = tracker
@@ -290,6 +298,7 @@ def make_section(c, contact, tracker):
     return section
 
 
+@functools.cache
 def make_cycle(c, section, tracker):
     """The refined steady cycle of a Contact, with its margins and, with the tangent
     (``tracker``), its leading multiplier: ``cycle(...) -> Cycle``."""
@@ -342,6 +351,7 @@ def make_cycle(c, section, tracker):
     return cycle
 
 
+@functools.cache
 def make_record(c):
     """``record(t, y, data, p, history, row, log) -> key``: a section's state into row
     ``row`` of ``history``, and its rotor angle (mod 2 pi) and psi into ``log`` (its last
@@ -361,6 +371,7 @@ def make_record(c):
     return record
 
 
+@functools.cache
 def make_transient(c, jump_early, section, known_cycles=True):
     """The transient of a Contact: ``transient(p, data, r, settings, repeat_tol, log, t, y,
     history, known) -> Transient``, sections from (t, y) until p of them repeat

@@ -30,6 +30,7 @@ A cycle's perturbations are the columns of a 5 x d matrix, one per section coord
   not one of the pattern.
 """
 
+import functools
 import math
 from collections import namedtuple
 
@@ -182,6 +183,7 @@ def make_acceleration_differential(model, n):
     return differential
 
 
+@functools.cache
 def make_tracker(c, n, methods=OTHER_METHODS):
     """The tangent's updates for a Contact (see the module docstring): the section's
     coordinates at the start, through a flight, through a contact, and the multiplier;
