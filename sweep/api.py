@@ -236,7 +236,7 @@ def warmup(mechanisms: list[str] | str | None = None, *, workers: int | None = N
     Raises:
         UserError: an unknown mechanism, or ``workers`` not a whole number >= 1.
     """
-    from sweep.warmup import warm_up_mechanisms
+    from sweep.compile_ahead import warm_up_mechanisms
 
     if isinstance(mechanisms, str):
         mechanisms = [mechanisms]

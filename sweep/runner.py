@@ -197,7 +197,7 @@ def compile_first(sweep, announce: bool) -> None:
     pendulum's integration core), and the cache makes later runs start at once. Without
     this the progress bar would sit at 0 for that time. Where the spec needs several entry
     points (engine.compile_groups) and the first is not in the cache, the others compile
-    meanwhile in processes of their own (warmup.compile_in_parallel), one per core."""
+    meanwhile in processes of their own (compile_ahead.compile_in_parallel), one per core."""
     started = time.perf_counter()
     params = engine.sample_parameters(sweep)
     groups = engine.compile_groups(sweep, params)
@@ -211,10 +211,9 @@ def compile_first(sweep, announce: bool) -> None:
         except cf.TimeoutError:
             pass
         if len(groups) > 1:
-            from sweep import warmup
+            from sweep.compile_ahead import compile_in_parallel, cores
 
-            others = pool.submit(warmup.compile_in_parallel, sweep, groups[1:],
-                                 max(1, warmup.cores() - 1))
+            others = pool.submit(compile_in_parallel, sweep, groups[1:], max(1, cores() - 1))
             compiling = pool.submit(_after, compiling, others, sweep)
         if announce:
             _wait_with_clock(compiling, "compiling kernels (first run only; cached for later "

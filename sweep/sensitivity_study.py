@@ -190,7 +190,7 @@ def _inside(bounds, dist) -> float:
 def evaluate(base, params, workers=None):
     """(outputs, status) of the kernel over every column of ``params``, in blocks on
     threads (the kernels release the GIL)."""
-    from sweep.warmup import cores
+    from sweep.compile_ahead import cores
 
     n = params.shape[1]
     starts = list(range(0, n, BLOCK))

@@ -1,4 +1,4 @@
-"""Compiling ahead (sweep/warmup.py): the jobs of one system run in one process, where the
+"""Compiling ahead (sweep/compile_ahead.py): the jobs of one system run in one process, where the
 parts its entry points share are compiled once (kernels/impact/impact_map.py)."""
 
 import os
@@ -6,7 +6,7 @@ import time
 from pathlib import Path
 
 from sweep import example_specs
-from sweep.warmup import Job, _tasks, mechanism_jobs, run_jobs, spec_together, together
+from sweep.compile_ahead import Job, _tasks, mechanism_jobs, run_jobs, spec_together, together
 
 
 def write_pid(path, seconds=0.0):
@@ -79,3 +79,33 @@ def test_the_entry_points_of_one_system_share_the_parts_that_do_not_depend_on_th
     assert one.steady is not other.steady
     plain = make_impact_map(c, False, False, True, True, ())
     assert plain.section is not one.section and plain.contact is one.contact
+
+
+def test_no_module_of_the_package_is_named_as_a_function_of_its_api():
+    """Importing a submodule sets it on the package: a module sweep/warmup.py replaced the
+    API's ``sweep.warmup`` once imported, and ``from sweep import warmup`` in the runner got
+    the function, not the module (a cold first run of a spec of two systems failed)."""
+    import sweep
+
+    modules = {path.stem for path in Path(sweep.__file__).parent.glob("*.py")}
+    assert modules & set(sweep.__all__) == set()
+    assert sweep.warmup.__module__ == "sweep.api"
+
+
+def test_a_first_run_of_several_groups_compiles_the_others_in_their_processes(monkeypatch):
+    """Where the spec's first group of entry points is not in the cache, the runner
+    compiles the other groups meanwhile (compile_ahead.compile_in_parallel), then loads
+    every group here."""
+    import time
+
+    from sweep import compile_ahead, engine, runner
+
+    compiled, loaded = [], []
+    monkeypatch.setattr(engine, "sample_parameters", lambda sweep: None)
+    monkeypatch.setattr(engine, "compile_groups", lambda sweep, params: [[0], [1, 2], [3]])
+    monkeypatch.setattr(engine, "warm_up", lambda sweep, columns=None: (
+        time.sleep(runner.COMPILE_NOTICE_AFTER + 0.3), loaded.append(columns)))
+    monkeypatch.setattr(compile_ahead, "compile_in_parallel",
+                        lambda sweep, groups, workers: compiled.append(groups))
+    runner.compile_first(None, announce=False)
+    assert compiled == [[[1, 2], [3]]] and loaded == [[0], None]

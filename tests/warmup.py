@@ -1,6 +1,6 @@
 """What the test suite compiles before its tests start (conftest.py: pytest_sessionstart),
-in parallel processes, each entry point once (sweep/warmup.py): the kernels the tests run
-and the tests' own probes. The tests then load them from the cache, on every worker.
+in parallel processes, each entry point once (sweep/compile_ahead.py): the kernels the tests
+run and the tests' own probes. The tests then load them from the cache, on every worker.
 
 A job is a function here called with its arguments in a process of its own (those of one
 pendulum system in one process, which compiles the parts they share once): every built-in
@@ -21,8 +21,8 @@ from pathlib import Path
 import numba
 
 from kernels.pendulum.table import TOOLS
-from sweep.warmup import (Job, cores, example_jobs, machine_full_job, on_request_jobs,
-                          run_jobs, together)
+from sweep.compile_ahead import (Job, cores, example_jobs, machine_full_job,
+                                 on_request_jobs, run_jobs, together)
 
 ROOT = Path(__file__).resolve().parent.parent
 

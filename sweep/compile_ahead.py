@@ -161,7 +161,7 @@ def example_jobs(names: Iterable[str]) -> list[Job]:
     from sweep import example_specs
 
     texts = {name: example_specs.text(name) for name in names}
-    return [Job(f"example {name}", "sweep.warmup:compile_spec", (text,), spec_together(text))
+    return [Job(f"example {name}", "sweep.compile_ahead:compile_spec", (text,), spec_together(text))
             for name, text in texts.items()]
 
 
@@ -170,7 +170,7 @@ def pendulum_system_jobs() -> list[Job]:
     designer runs first on each."""
     from kernels.pendulum.table import SYSTEMS
 
-    return [Job(f"rotary_pendulum {s.model} on {s.tool}", "sweep.warmup:compile_spec",
+    return [Job(f"rotary_pendulum {s.model} on {s.tool}", "sweep.compile_ahead:compile_spec",
                 (f'mechanism = "rotary_pendulum"\n[fixed]\nmodel = "{s.model}"\n'
                  f'tool = "{s.tool}"\nkappa = 1.2\n',),
                 together("rotary_pendulum", model=s.model, tool=s.tool))
@@ -182,7 +182,7 @@ def machine_full_job() -> Job:
     the motor for, profiles, force peaks, flywheels for delta), which its example, asking
     none of them, does not compile: a chained machine's first run needs it."""
     text = 'mechanism = "impact_machine"\n[grid]\nomega1 = [20.0]\n'
-    return Job("impact_machine at a given crank speed", "sweep.warmup:compile_spec", (text,),
+    return Job("impact_machine at a given crank speed", "sweep.compile_ahead:compile_spec", (text,),
                spec_together(text))
 
 
@@ -215,7 +215,7 @@ ON_REQUEST = {
 def on_request_jobs(mechanisms: Iterable[str], leave_out: Iterable[str] = ()) -> list[Job]:
     """A job per ON_REQUEST spec of these mechanisms, but those labelled in leave_out."""
     left = set(leave_out)
-    return [Job(f"{name} {label}", "sweep.warmup:compile_spec", (text,), spec_together(text))
+    return [Job(f"{name} {label}", "sweep.compile_ahead:compile_spec", (text,), spec_together(text))
             for name in mechanisms for label, text in ON_REQUEST.get(name, {}).items()
             if label not in left]
 
@@ -261,5 +261,5 @@ def compile_in_parallel(sweep, groups: Sequence[Sequence[int]],
                         workers: int | None = None) -> None:
     """Compile each group of a sweep's sample points (columns that run entry points of
     their own) in a process of its own, so that this process then loads them all."""
-    run_jobs([Job(f"group {i}", "sweep.warmup:compile_spec", (sweep, tuple(g)))
+    run_jobs([Job(f"group {i}", "sweep.compile_ahead:compile_spec", (sweep, tuple(g)))
               for i, g in enumerate(groups)], workers)
