@@ -156,13 +156,16 @@ def compile_spec(given, columns: Sequence[int] | None = None) -> None:
         sweep.kernel(params, sweep.method_record)
 
 
+def spec_job(name: str, text: str) -> Job:
+    """The job that compiles what a spec (TOML text) needs, with the spec's key."""
+    return Job(name, "sweep.compile_ahead:compile_spec", (text,), spec_together(text))
+
+
 def example_jobs(names: Iterable[str]) -> list[Job]:
     """A job per built-in example: what its first run compiles."""
     from sweep import example_specs
 
-    texts = {name: example_specs.text(name) for name in names}
-    return [Job(f"example {name}", "sweep.compile_ahead:compile_spec", (text,), spec_together(text))
-            for name, text in texts.items()]
+    return [spec_job(f"example {name}", example_specs.text(name)) for name in names]
 
 
 def pendulum_system_jobs() -> list[Job]:
@@ -170,10 +173,9 @@ def pendulum_system_jobs() -> list[Job]:
     designer runs first on each."""
     from kernels.pendulum.table import SYSTEMS
 
-    return [Job(f"rotary_pendulum {s.model} on {s.tool}", "sweep.compile_ahead:compile_spec",
-                (f'mechanism = "rotary_pendulum"\n[fixed]\nmodel = "{s.model}"\n'
-                 f'tool = "{s.tool}"\nkappa = 1.2\n',),
-                together("rotary_pendulum", model=s.model, tool=s.tool))
+    return [spec_job(f"rotary_pendulum {s.model} on {s.tool}",
+                     f'mechanism = "rotary_pendulum"\n[fixed]\nmodel = "{s.model}"\n'
+                     f'tool = "{s.tool}"\nkappa = 1.2\n')
             for s in SYSTEMS]
 
 
@@ -181,9 +183,8 @@ def machine_full_job() -> Job:
     """The impact machine's full block (kernels/impact_machine.py: a crank speed to size
     the motor for, profiles, force peaks, flywheels for delta), which its example, asking
     none of them, does not compile: a chained machine's first run needs it."""
-    text = 'mechanism = "impact_machine"\n[grid]\nomega1 = [20.0]\n'
-    return Job("impact_machine at a given crank speed", "sweep.compile_ahead:compile_spec", (text,),
-               spec_together(text))
+    return spec_job("impact_machine at a given crank speed",
+                    'mechanism = "impact_machine"\n[grid]\nomega1 = [20.0]\n')
 
 
 def _pendulum_loads(model: str, tool: str) -> str:
@@ -215,7 +216,7 @@ ON_REQUEST = {
 def on_request_jobs(mechanisms: Iterable[str], leave_out: Iterable[str] = ()) -> list[Job]:
     """A job per ON_REQUEST spec of these mechanisms, but those labelled in leave_out."""
     left = set(leave_out)
-    return [Job(f"{name} {label}", "sweep.compile_ahead:compile_spec", (text,), spec_together(text))
+    return [spec_job(f"{name} {label}", text)
             for name in mechanisms for label, text in ON_REQUEST.get(name, {}).items()
             if label not in left]
 
