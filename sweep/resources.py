@@ -15,6 +15,7 @@ import errno
 import fcntl
 import os
 import shutil
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,7 +27,7 @@ MEMORY_SHARE = 0.8
 #: a run whose estimate is larger than this is announced before it starts
 ANNOUNCE_BYTES = 1 << 30
 #: the file-system's limit on a name, kept for the run's own names beside the target
-#: (".NAME.partial", ".NAME.tmp-PID", ".NAME.lock")
+#: (".NAME.partial", ".NAME.tmp-PID", ".NAME.lock", ".NAME.lock-PID")
 NAME_ROOM = 24
 
 
@@ -165,50 +166,108 @@ def target_lock(target: Path):
 def _locked_fd(path: Path, target: Path) -> int:
     """An open file descriptor of ``path`` holding its lock, with this process's id in it;
     a UserError naming the holder where another live process has it; RunFailed (and no
-    file left) where it cannot be written."""
-    for _ in range(100):
-        created = not path.exists()
-        try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as err:
-            raise RunFailed(f"path: cannot lock {target}: "
-                            f"{disk_failure(err) or err.strerror or err}") from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as err:
-            holder = os.pread(fd, 64, 0).decode("ascii", "replace").strip() or "unknown"
-            os.close(fd)
-            if err.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                raise
-            raise UserError(f"path: another run (process {holder}) is writing {target}; "
-                            "wait for it to finish, or stop it first") from None
-        try:
-            if os.fstat(fd).st_ino != os.stat(path).st_ino:
-                os.close(fd)  # the file was removed (its run ended) after we opened it
-                continue
-        except FileNotFoundError:
-            os.close(fd)
-            continue
-        try:
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
-        except OSError as err:
-            if created:
-                with contextlib.suppress(OSError):
+    file left) where it cannot be written. The lock file appears with its holder's id in
+    it and already locked (it is written and locked under a name of its own, then linked
+    to ``path``), so a run that finds it held can always say by whom."""
+    pending = path.with_name(f"{path.name}-{os.getpid()}")
+    try:
+        for attempt in range(100):
+            try:
+                fd = os.open(path, os.O_RDWR)
+            except FileNotFoundError:
+                fd = _publish(pending, path, target)
+                if fd is not None:
+                    return fd
+                continue  # another run published its lock first, or ours was swept away
+            except OSError as err:
+                raise _cannot_lock(target, err) from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as err:
+                holder = os.pread(fd, 64, 0).decode("ascii", "replace").strip() or "unknown"
+                os.close(fd)
+                if err.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                    raise
+                if not _running(holder) and attempt < 99:
+                    time.sleep(0.005)  # another run is taking over a dead process's lock
+                    continue
+                raise UserError(f"path: another run (process {holder}) is writing {target}; "
+                                "wait for it to finish, or stop it first") from None
+            # the lock of a process that is gone: removed while held, then ours is published
+            with contextlib.suppress(FileNotFoundError):
+                if os.fstat(fd).st_ino == os.stat(path).st_ino:
                     os.unlink(path)
             os.close(fd)
-            raise RunFailed(f"path: cannot lock {target}: "
-                            f"{disk_failure(err) or err.strerror or err}") from None
-        return fd
-    raise RunFailed(f"path: cannot lock {target}: its lock file keeps changing")
+        raise RunFailed(f"path: cannot lock {target}: its lock file keeps changing")
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(pending)
+
+
+def _running(holder: str) -> bool:
+    """Whether the process named in a lock file is running (a lock file names its holder
+    from the moment it appears, except while a dead process's lock is being taken over)."""
+    try:
+        os.kill(int(holder), 0)
+    except (ValueError, ProcessLookupError):
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _publish(pending: Path, path: Path, target: Path) -> int | None:
+    """Write this process's id into ``pending``, lock it and link it to ``path``: the open,
+    locked descriptor, or None where ``path`` appeared first (or ``pending`` was removed as
+    a stale temporary by the run that holds the target). On a file system without hard
+    links (FAT) the lock file is made in place, its id written a moment after."""
+    try:
+        fd = os.open(pending, os.O_RDWR | os.O_CREAT | os.O_TRUNC, 0o644)
+    except OSError as err:
+        raise _cannot_lock(target, err) from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # nobody else opens this name
+        os.write(fd, f"{os.getpid()}\n".encode())
+        try:
+            os.link(pending, path)
+        except OSError as err:
+            if err.errno not in NO_HARD_LINKS:
+                raise
+            os.close(fd)
+            fd = -1
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o644)
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            os.write(fd, f"{os.getpid()}\n".encode())
+    except (FileExistsError, FileNotFoundError, BlockingIOError):
+        _close(fd)
+        return None
+    except OSError as err:
+        _close(fd)
+        raise _cannot_lock(target, err) from None
+    return fd
+
+
+def _close(fd: int) -> None:
+    if fd >= 0:
+        os.close(fd)
+
+
+#: what ``link`` says on a file system that has no hard links
+NO_HARD_LINKS = (errno.EPERM, errno.EOPNOTSUPP, errno.ENOTSUP)
+
+
+def _cannot_lock(target: Path, err: OSError) -> RunFailed:
+    return RunFailed(f"path: cannot lock {target}: {disk_failure(err) or err.strerror or err}")
 
 
 def remove_stale_temporaries(target: Path) -> None:
     """Temporary files of earlier runs on ``target`` (``.NAME.tmp-PID``, left by a kill
-    during the final write): gone once this run holds the target's lock."""
-    for stale in target.parent.glob(f".{target.name}.tmp-*"):
-        with contextlib.suppress(OSError):
-            stale.unlink()
+    during the final write, and ``.NAME.lock-PID``, by a kill while taking the lock): gone
+    once this run holds the target's lock."""
+    for pattern in (f".{target.name}.tmp-*", f".{target.name}.lock-*"):
+        for stale in target.parent.glob(pattern):
+            with contextlib.suppress(OSError):
+                stale.unlink()
 
 
 #: errors of the disk, not of the input: (errno, what it means for the user)

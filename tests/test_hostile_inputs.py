@@ -38,8 +38,6 @@ SLOW = 'mechanism = "six_link"\n[grid]\nlambda2 = {start = 1.5, stop = 1.8, num 
        'beta = {start = 0.0, stop = 1.0, num = 300}\n'
 
 
-
-
 def one_line(err: str) -> str:
     lines = [line for line in err.splitlines() if line.strip()]
     assert len(lines) == 1, err
@@ -166,6 +164,68 @@ def test_two_runs_on_one_target_the_second_is_refused_with_the_first_ones_pid(tm
         first.wait(timeout=300)
     assert first.returncode == 0 and target.is_file()
     assert leftovers(tmp_path, "slow.nc") == []
+
+
+def test_the_lock_file_never_exists_without_its_holders_id(tmp_path, monkeypatch):
+    """The second run names the first by its id even where the first was stopped while it
+    took its lock (CI once stopped it between making the file and writing the id): at every
+    write the lock makes, its file is absent or already names its holder."""
+    from sweep import resources
+
+    path = resources.lock_path(tmp_path / "s.nc")
+    seen = []
+
+    def watching(name):
+        def call(*args):
+            seen.append(path.read_text() if path.exists() else None)
+            return getattr(os, name)(*args)
+        return call
+
+    spy = type("os", (), {name: staticmethod(watching(name)) if name in
+                          ("write", "pwrite", "ftruncate", "link") else getattr(os, name)
+                          for name in dir(os) if not name.startswith("__")})
+    monkeypatch.setattr(resources, "os", spy)
+    with resources.target_lock(tmp_path / "s.nc"):
+        assert path.read_text() == f"{os.getpid()}\n"
+    assert seen and all(text in (None, f"{os.getpid()}\n") for text in seen), seen
+    assert leftovers(tmp_path, "s.nc") == []
+
+
+#: one contender for a lock: waits for the start file, takes the lock or names its holder
+CONTENDER = """
+import os, sys, time
+from pathlib import Path
+from sweep.resources import target_lock
+from sweep.errors import UserError
+target, start = Path(sys.argv[1]), Path(sys.argv[2])
+while not start.exists():
+    time.sleep(0.001)
+try:
+    with target_lock(target):
+        print("held", os.getpid(), flush=True)
+        time.sleep(1.0)
+except UserError as err:
+    print("refused", err, flush=True)
+"""
+
+
+@pytest.mark.parametrize("stale", [False, True], ids=["free", "left by a dead process"])
+def test_runs_that_start_together_one_holds_the_lock_and_the_others_name_it(tmp_path, stale):
+    """Six processes race for one target's lock (free, or left by a dead process): exactly
+    one holds it, every other is refused naming that one, and nothing is left behind."""
+    target, start = tmp_path / "s.nc", tmp_path / "go"
+    if stale:
+        (tmp_path / ".s.nc.lock").write_text("999999\n")
+    racers = [subprocess.Popen([sys.executable, "-c", CONTENDER, str(target), str(start)],
+                               stdout=subprocess.PIPE, text=True) for _ in range(6)]
+    time.sleep(1.0)  # every contender imported and waiting
+    start.touch()
+    said = [racer.communicate(timeout=60)[0].split(None, 2) for racer in racers]
+    holders = [int(words[1]) for words in said if words[0] == "held"]
+    assert len(holders) == 1, said
+    refusals = [words[2] for words in said if words[0] == "refused"]
+    assert len(refusals) == 5 and all(f"process {holders[0]})" in r for r in refusals), said
+    assert leftovers(tmp_path, "s.nc") == []
 
 
 def test_a_lock_left_by_a_dead_process_is_taken_over(tmp_path, small_spec, capsys):
