@@ -3,8 +3,11 @@ are numba closures with no Python wrapper (kernels/__init__.py), so each probe i
 jitted function around one of them, built on first use and cached on disk as the kernels
 are (``cached``: the first process that calls it compiles it, the others load it).
 
-``SYSTEMS``: every model x tool as a Contact, by (model, tool) name, with the test-defined
-``relative_stop`` (tests/stop_tool.py) beside the mechanism's two tools.
+Every model x tool is a Contact, by (model, tool) name, with the test-defined
+``relative_stop`` (tests/stop_tool.py) beside the mechanism's two tools: ``contact`` with
+every method in its flights (for the flight probe), ``dopri5_contact`` with DOPRI5 alone on
+the mechanism's tools (for the others, which step by DOPRI5: the entry points' own contact,
+so that a process that compiled those compiles the parts a probe shares with them once).
 """
 
 from functools import cache
@@ -17,7 +20,7 @@ from kernels.impact.impact_map import SPEED_EPS, make_impact_map
 from kernels.impact.tangent import DPSI, DW, make_tracker
 from kernels.impact.outcomes import FLIGHT_EVENT, Settings
 from kernels.impact.runge_kutta import METHOD_DOP853, METHOD_DOPRI5, METHOD_RK4, make_stepper
-from kernels.pendulum import blade, blade_geometry, models, tools
+from kernels.pendulum import blade, blade_geometry, models, systems, tools
 from tests.stop_tool import relative_stop
 
 MODELS = {"paper": models.PAPER, "rigid": models.RIGID, "rotor": models.ROTOR}
@@ -36,6 +39,15 @@ def cached(probe, *key: str):
 def contact(model: str, tool: str):
     """The Contact of a model on a tool."""
     return TOOLS[tool](MODELS[model])
+
+
+@cache
+def dopri5_contact(model: str, tool: str):
+    """The Contact of a model on a mechanism's tool whose flights step by DOPRI5 alone (the
+    entry points'); on the test stop, its only one."""
+    if tool in systems.TOOL_CONTACTS:
+        return systems.CONTACTS[model, tool, ()]
+    return contact(model, tool)
 
 
 def settings(method="dopri5", rtol=1e-12, atol=1e-14, dt=0.002, max_steps=10**6,
@@ -81,7 +93,7 @@ def fixed_steps(model: str):
 @cache
 def restitute(model: str, tool: str):
     """The impact map's Newton law restitute(t, y, data, p, r) -> (t, y)."""
-    law = make_impact_map(contact(model, tool), False).restitute
+    law = make_impact_map(dopri5_contact(model, tool), False).restitute
 
     @njit
     def probe(t, y, data, p, r):
@@ -96,7 +108,7 @@ def chatter(model: str, tool: str):
     leave slower than the impact map's SPEED_EPS; there, the chatter's accumulation point
     by the tool's ``settle`` (the ballistic tail): (accumulated, impacts, t, y, flight
     outcome, flight event). (The impact map's contact goes on from there into a slide.)"""
-    c = contact(model, tool)
+    c = dopri5_contact(model, tool)
     fly, restitute = c.flight, make_impact_map(c, False).restitute
     normal_speed, normal_acceleration, settle = (c.normal_speed, c.normal_acceleration,
                                                  c.settle)
@@ -123,7 +135,7 @@ def chatter(model: str, tool: str):
 def zeno(model: str, tool: str):
     """The impact map's contact from a state at a bounce slower than SPEED_EPS: (opens, t,
     y, data, slid, accumulated, amplitude, peak, cost)."""
-    hit = make_impact_map(contact(model, tool), False).contact
+    hit = make_impact_map(dopri5_contact(model, tool), False).contact
 
     @njit
     def probe(t, y, data, p, r, s):
@@ -143,7 +155,7 @@ def section_jacobian(model: str, tool: str):
     reached after ``transient`` sections, and central differences (step eps) of the same
     sections from states moved along each coordinate (kept on the contact surface: on the
     blade the rotor angle from the face, at constant speed the time with it)."""
-    c = contact(model, tool)
+    c = dopri5_contact(model, tool)
     m = MODELS[model]
     section = make_impact_map(c, False, True).section
     start = make_tracker(c, 2 if m.driven else 4).start
@@ -242,7 +254,7 @@ def follow(model: str, tool: str):
     period. The blade's reach is data[1]: pass it in ``data``."""
     from kernels.impact.tangent import leading_multiplier as lead
 
-    c = contact(model, tool)
+    c = dopri5_contact(model, tool)
     m = MODELS[model]
     section = make_impact_map(c, False, True).section
     start = make_tracker(c, 2 if m.driven else 4).start
@@ -309,7 +321,7 @@ def accumulation(model: str):
     ``accumulation_tangent`` applied to ``column`` (a perturbation of the contact state at
     (t, y)), and central differences (step eps) of where the impact map's contact puts
     the striker just after its law (t_law, y_law) from contact states moved along it."""
-    c = contact(model, "lab_window")
+    c = dopri5_contact(model, "lab_window")
     m = MODELS[model]
     hit = make_impact_map(c, False).contact
     accumulate = c.accumulation_tangent
@@ -344,7 +356,7 @@ def impacts_from_rest(model: str, tool: str):
     (relative, as the driver classifies period 1): the impacts a design takes to settle,
     counted as the driver counts them, and the section state there; (-1, last key) where
     a section ends otherwise or limit sections do not settle."""
-    c = contact(model, tool)
+    c = dopri5_contact(model, tool)
     section = make_impact_map(c, False).section
     first, key_of = c.first, c.key
 

@@ -211,6 +211,18 @@ def test_H3_a_grazing_contact_is_found(model, tool, eps):
     assert fl.cost.steps < 300  # found inside long steps
 
 
+def chatter_case(model, tool):
+    """H6's chatter: (twin, flight data, r, the normal speed's Jacobian, t0, y0)."""
+    twin = TWINS[model]
+    data = tool_data(twin, tool)
+    if tool == "relative_stop":
+        if model == "rigid":
+            twin = Twin("rigid", k=1.0, kappa=1.0)  # kappa k = 1
+        return twin, data, 0.8, (lambda t, y: (0.0, 1.0)), 0.0, twin.state(-0.6, 0.0)
+    psi, jac = pulled_back(model, tool)
+    return twin, data, 0.5, jac, *on_tool(model, tool, psi, -1e-3)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("model, tool", OFF_EQUILIBRIUM)
 def test_H6_a_chatter_accumulates_where_scipy_puts_it(model, tool):
@@ -219,17 +231,7 @@ def test_H6_a_chatter_accumulates_where_scipy_puts_it(model, tool):
     sequence ends at its accumulation point (the ballistic tail). SciPy, bounce by bounce,
     needs as many impacts and puts the accumulation at the same time. For the rigid model
     on the stop the accumulation time is 12.834839 (70 impacts to r v < 1e-7; 71 to v < 1e-7)."""
-    twin = TWINS[model]
-    data = tool_data(twin, tool)
-    if tool == "relative_stop":
-        if model == "rigid":
-            twin = Twin("rigid", k=1.0, kappa=1.0)  # kappa k = 1
-        r, jac = 0.8, (lambda t, y: (0.0, 1.0))
-        t0, y0 = 0.0, twin.state(-0.6, 0.0)
-    else:
-        psi, jac = pulled_back(model, tool)
-        r = 0.5
-        t0, y0 = on_tool(model, tool, psi, -1e-3)
+    twin, data, r, jac, t0, y0 = chatter_case(model, tool)
     impacts, t_inf = chatter_reference(twin, tool, jac, t0, y0, data, r)
     accumulated, n, t, y, *_ = probes.chatter(model, tool)(t0, tuple(y0), twin.p, data, r,
                                                           probes.settings(), 10000)
@@ -237,8 +239,7 @@ def test_H6_a_chatter_accumulates_where_scipy_puts_it(model, tool):
     assert t == pytest.approx(t_inf, abs=1e-7)
     # the impact map's contact there: the accumulated chatter sticks (a slide on the blade)
     opens, *_, chattered, amplitude, peak, cost = probes.zeno(model, tool)(
-        t, y, data if tool == "relative_stop" else (data[0], WINDOW, twin.k, 0.0, 1.0),
-        twin.p, r, probes.settings())
+        t, y, data, twin.p, r, probes.settings())
     assert opens
     if tool == "relative_stop" and model == "rigid":
         assert impacts == 70 and t == pytest.approx(12.834839, abs=1e-6)

@@ -78,6 +78,14 @@ SYSTEMS = [("paper", "rotor_stop"), ("rigid", "rotor_stop"), ("rotor", "rotor_st
            ("paper", "lab_window"), ("rigid", "lab_window"), ("rotor", "lab_window")]
 
 
+def case_of(model, tool, design):
+    """The case row (kernels/pendulum/cases.py) of a design of a system: a heavy rotor
+    (J1/J_c = 100) on a stiff motor (slope 100) at idle speed 1 unless the design says."""
+    values = dict(model=MODELS[model], tool=TOOLS[tool], tool_window=0.0,
+                  rotor_inertia_ratio=100.0, motor_slope=100.0, idle_speed=1.0) | design
+    return np.array([float(values[name]) for name in CASE_COLUMNS])
+
+
 def draw(rng, tool, n):
     return {name: rng.uniform(lo, hi, n) for name, (lo, hi) in DOMAIN[tool].items()}
 
@@ -90,11 +98,7 @@ def section_jacobians(model, tool, design, rtol=1e-12, eps=2e-4, transient=600):
     shows as a difference that doubles when the step halves):
     plain central differences were 1.4e-6 off at eps = 1e-5 on a blade design whose second
     derivatives are ~3e4, and at eps = 1e-6 the map's own rounding (~1e-11) shows."""
-    case = np.zeros(len(CASE_COLUMNS))
-    values = dict(model=MODELS[model], tool=TOOLS[tool], tool_window=0.0,
-                  rotor_inertia_ratio=100.0, motor_slope=100.0, idle_speed=1.0) | design
-    for i, name in enumerate(CASE_COLUMNS):
-        case[i] = values[name]
+    case = case_of(model, tool, design)
     params = systems.PARAMETERS[model](case)
     data = systems.DATA[tool](case)
     probe = probes.section_jacobian(model, tool)
@@ -206,6 +210,37 @@ def test_multipliers_through_a_slide_and_an_accumulated_chatter_equal_central_di
     assert compared >= min(5, len(chosen) - 1), compared
 
 
+def contact_to_accumulate(rng, model):
+    """A random contact on the blade's face whose bounce would leave slower than the Zeno
+    guard's speed (approach 0.5 SPEED_EPS/R), with a random perturbation that keeps it on
+    the face and the largest difference step (<= 1e-8) that keeps the moved approach below
+    the guard's threshold: ((t, y, data, p, r, column, eps), (design, psi))."""
+    from kernels.impact.impact_map import SPEED_EPS
+    design = {name: float(v[0]) for name, v in draw(rng, "lab_window", 1).items()}
+    design["R"] = rng.uniform(0.05, 0.5)
+    case = case_of(model, "lab_window", design)
+    p = systems.PARAMETERS[model](case)
+    lower, window, k, level, side = systems.lab_window_data(case)
+    r = design["R"]
+    psi = rng.uniform(-0.8, 0.8) * window
+    w = 1.0 if model != "rotor" else rng.uniform(0.8, 1.2)
+    x = k * k + 1.0 + 2.0 * k * math.cos(psi)  # the contact point's radius squared
+    h, h_slope = (1.0 + k * math.cos(psi)) / x, k * (1.0 - k * k) * math.sin(psi) / x**2
+    approach = 0.5 * SPEED_EPS / r  # closing at G' = approach on the face met rising
+    phi1 = -math.atan2(math.sin(psi), k + math.cos(psi))  # on the face G = 0
+    t = phi1 if model != "rotor" else 0.0
+    y = (psi, (approach - w) / h) if model != "rotor" else (phi1, w, psi, (approach - w) / h)
+    data = (lower, window, k, 0.0, 1.0)
+    column = rng.normal(size=5)
+    column[1] = -h * column[3]  # the moved contact stays on the face
+    if model != "rotor":
+        column[0], column[2] = column[1], 0.0  # the rotor angle is the time
+    # keep the moved approach below the guard's threshold: the jump exists on both sides
+    d_approach = column[2] + h * column[4] + h_slope * y[-1] * column[3]
+    eps = min(1e-8, 0.25 * approach / max(abs(d_approach), 1e-300))
+    return (t, y, data, p, r, column, eps), (design, psi)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("model", ["paper", "rigid", "rotor"])
 def test_the_jump_to_a_chatters_accumulation_point_is_differentiated(model):
@@ -220,39 +255,12 @@ def test_the_jump_to_a_chatters_accumulation_point_is_differentiated(model):
     most 1e-8 and keeps the moved approach below the threshold; the differences' own
     noise is ~1e-7 at step 1e-8 and 2e-5 at 1e-10 (the face's Newton solve and the
     rotor angle's rounding over a step that small)."""
-    from kernels.impact.impact_map import SPEED_EPS
     rng = np.random.default_rng(1610 + ["paper", "rigid", "rotor"].index(model))
     probe = probes.accumulation(model)
     settings = probes.settings()
     tried = 0
     for _ in range(40):
-        design = {name: float(v[0]) for name, v in draw(rng, "lab_window", 1).items()}
-        design["R"] = rng.uniform(0.05, 0.5)
-        case = np.zeros(len(CASE_COLUMNS))
-        values = dict(model=MODELS[model], tool=TOOLS["lab_window"], rotor_inertia_ratio=100.0,
-                      motor_slope=100.0, idle_speed=1.0) | design
-        for i, name in enumerate(CASE_COLUMNS):
-            case[i] = values[name]
-        p = systems.PARAMETERS[model](case)
-        lower, window, k, level, side = systems.lab_window_data(case)
-        r = design["R"]
-        psi = rng.uniform(-0.8, 0.8) * window
-        w = 1.0 if model != "rotor" else rng.uniform(0.8, 1.2)
-        x = k * k + 1.0 + 2.0 * k * math.cos(psi)  # the contact point's radius squared
-        h, h_slope = (1.0 + k * math.cos(psi)) / x, k * (1.0 - k * k) * math.sin(psi) / x**2
-        approach = 0.5 * SPEED_EPS / r  # closing at G' = approach on the face met rising
-        phi1 = -math.atan2(math.sin(psi), k + math.cos(psi))  # on the face G = 0
-        t = phi1 if model != "rotor" else 0.0
-        y = (psi, (approach - w) / h) if model != "rotor" else (phi1, w, psi,
-                                                                (approach - w) / h)
-        data = (lower, window, k, 0.0, 1.0)
-        column = rng.normal(size=5)
-        column[1] = -h * column[3]  # the moved contact stays on the face
-        if model != "rotor":
-            column[0], column[2] = column[1], 0.0  # the rotor angle is the time
-        # keep the moved approach below the guard's threshold: the jump exists on both sides
-        d_approach = column[2] + h * column[4] + h_slope * y[-1] * column[3]
-        eps = min(1e-8, 0.25 * approach / max(abs(d_approach), 1e-300))
+        (t, y, data, p, r, column, eps), (design, psi) = contact_to_accumulate(rng, model)
         carried, differenced = probe(t, y, data, p, r, settings, column, eps)
         if not np.all(np.isfinite(differenced)):
             continue
@@ -279,11 +287,7 @@ def bisect(inside, lo, hi, rounds=40):
 
 def follow(model, design, rs, transient, steps, rtol=1e-11):
     """tests/probes.follow on the blade: one cycle followed along R."""
-    case = np.zeros(len(CASE_COLUMNS))
-    values = dict(model=MODELS[model], tool=TOOLS["lab_window"], rotor_inertia_ratio=100.0,
-                  motor_slope=100.0, idle_speed=1.0, R=rs[0]) | design
-    for i, name in enumerate(CASE_COLUMNS):
-        case[i] = values[name]
+    case = case_of(model, "lab_window", {"R": rs[0]} | design)
     params = systems.PARAMETERS[model](case)
     return probes.follow(model, "lab_window")(
         params, systems.lab_window_data(case), np.asarray(rs, float),

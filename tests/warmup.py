@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numba
 
-from kernels.pendulum.table import TOOLS
+from kernels.pendulum.table import MODELS, TOOLS
 from sweep.compile_ahead import (Job, cores, example_jobs, machine_full_job,
                                  on_request_jobs, run_jobs, together)
 
@@ -57,6 +57,41 @@ def flight_probe(model, tool):
 
     twin = TWINS[model]
     fly(model, tool, 0.0, twin.state(0.1, 0.0), tool_data(twin, tool), max_steps=50)
+
+
+def system_probe(kind, model, tool):
+    """A probe of one system (tests/probes.py) called as its tests call it, on a cheap case,
+    in the process of the system's entry points, whose parts it shares."""
+    import numpy as np
+
+    from kernels.pendulum import systems
+    from tests import probes, test_stability
+
+    settings = probes.settings()
+    design = {"k": 1.0, "xi": 4.0, "kappa": 1.2, "R": 0.05, "tool_window": 0.3}
+    if kind == "section_jacobian":
+        test_stability.section_jacobians(model, tool, design, transient=1)
+    elif kind == "follow":
+        test_stability.follow(model, design, [0.05], transient=1, steps=1)
+    elif kind == "accumulation":
+        (t, y, data, p, r, column, eps), _ = test_stability.contact_to_accumulate(
+            np.random.default_rng(0), model)
+        probes.accumulation(model)(t, y, data, p, r, settings, column, eps)
+    elif kind == "chatter":  # and the impact map's contact after it
+        from tests.test_hard_cases import chatter_case
+
+        twin, data, r, _, t0, y0 = chatter_case(model, tool)
+        _, _, t, y, *_ = probes.chatter(model, tool)(t0, tuple(y0), twin.p, data, r,
+                                                     settings, 1)
+        probes.zeno(model, tool)(t, y, data, twin.p, r, settings)
+    elif kind == "impacts_from_rest":
+        case = test_stability.case_of(model, tool, design)
+        probes.impacts_from_rest(model, tool)(systems.PARAMETERS[model](case),
+                                              systems.DATA[tool](case), 0.05, settings, 1e-9, 2)
+    else:
+        assert kind == "restitute", kind
+        probes.restitute(model, tool)(0.0, (0.0, 1.0, 0.0, 2.2), (0.0, 2.5),
+                                      (2.5, 4.0, 3.0, 0.0, 1.0), 0.3)
 
 
 def fixed_steps_probe(model):
@@ -136,13 +171,27 @@ def _entry_jobs(entries):
             for model, tool, method, tangent, two, starts in entries]
 
 
-def _probe_jobs():
-    return ([Job(f"flight probe {m} on {t}", "tests.warmup:flight_probe", (m, t),
-                 together("rotary_pendulum", model=m, tool=t) if t in TOOLS else "")
-             for m in ("paper", "rigid", "rotor")
-             for t in ("rotor_stop", "lab_window", "relative_stop")]
+#: the probes of one system the fast tests call (beside every system's flight probe), and
+#: those the slow tests add: (kind, model, tool)
+FAST_PROBES = (("restitute", "rotor", "rotor_stop"),)
+SLOW_PROBES = (tuple(("section_jacobian", m, t) for m in MODELS for t in TOOLS)
+               + tuple(("chatter", m, t) for m in MODELS for t in ("lab_window", "relative_stop"))
+               + tuple(("accumulation", m, "lab_window") for m in MODELS)
+               + (("follow", "rotor", "lab_window"), ("impacts_from_rest", "rotor", "rotor_stop")))
+
+
+def _system(model, tool):
+    """The key of a system's jobs (the test stop's own: it is no system of the table)."""
+    return together("rotary_pendulum" if tool in TOOLS else tool, model=model, tool=tool)
+
+
+def _probe_jobs(slow):
+    return ([Job(f"flight probe {m} on {t}", "tests.warmup:flight_probe", (m, t), _system(m, t))
+             for m in MODELS for t in (*TOOLS, "relative_stop")]
+            + [Job(f"{kind} probe {m} on {t}", "tests.warmup:system_probe", (kind, m, t),
+                   _system(m, t)) for kind, m, t in FAST_PROBES + (SLOW_PROBES if slow else ())]
             + [Job(f"fixed steps probe {m}", "tests.warmup:fixed_steps_probe", (m,))
-               for m in ("paper", "rigid", "rotor")])
+               for m in MODELS])
 
 
 def _examples():
@@ -154,7 +203,7 @@ def _examples():
 def jobs(slow: bool) -> list[Job]:
     """The warm-up of the fast loop, or of the whole suite: the longest first."""
     selected = _entry_jobs(FAST_ENTRY_POINTS + (SLOW_ENTRY_POINTS if slow else ()))
-    return (selected + [machine_full_job()] + _examples() + _probe_jobs()
+    return (selected + [machine_full_job()] + _examples() + _probe_jobs(slow)
             + on_request_jobs(("crank_rocker", "rotary_pendulum"),
                               () if slow else ("loads of rotor on lab_window",))
             + [Job("joint forces", "tests.warmup:joint_forces")])
@@ -164,7 +213,7 @@ def jobs(slow: bool) -> list[Job]:
 
 #: the test files the jobs compile from (beside kernels/ and sweep/)
 TEST_FILES = ("warmup.py", "probes.py", "stop_tool.py", "pendulum_twins.py",
-              "test_hard_cases.py")
+              "test_hard_cases.py", "test_stability.py")
 
 
 def stamp(selected: list[Job]) -> str:
