@@ -243,10 +243,15 @@ def test_a_lock_that_cannot_be_written_is_one_line_and_leaves_nothing(tmp_path, 
     small.write_text('mechanism = "crank_rocker"\n[grid]\nR = [0.2, 0.3]\n'
                      'largest_link = [2.0, 3.0]\n')
 
-    def full(fd, data, offset):
-        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    def full(write):
+        def call(fd, *args):  # the disk is full for the lock file alone
+            if ".s.nc.lock" in os.readlink(f"/proc/self/fd/{fd}"):
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            return write(fd, *args)
+        return call
 
-    monkeypatch.setattr(os, "pwrite", full)
+    monkeypatch.setattr(os, "write", full(os.write))
+    monkeypatch.setattr(os, "pwrite", full(os.pwrite))
     code, out, err = run_cli(capsys, "run", small, "-o", tmp_path / "s.nc")
     assert code == 1 and "no space left" in err and len(err.strip().splitlines()) == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
