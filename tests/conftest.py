@@ -55,6 +55,20 @@ _COMPILES = _CachedCompiles()
 numba_event.register("numba:compile", _COMPILES)
 
 
+#: the modules that take longest, started first so that the two workers end together
+#: (pytest-xdist hands out whole modules in collection order: ./tasks passes
+#: --no-loadscope-reorder, whose default order, the most tests first, left the
+#: walk-throughs for last, with the other worker idle meanwhile)
+LONGEST_FIRST = ("test_docs.py", "test_edges.py", "test_pendulum.py", "test_stability.py",
+                 "test_boundary.py", "test_hostile_inputs.py", "test_pendulum_models.py",
+                 "test_explorer.py", "test_machine.py", "test_pendulum_table.py")
+
+
+def pytest_collection_modifyitems(session, config, items):
+    rank = {name: i for i, name in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))  # stable: modules whole
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_runtest_setup(item):
     _COMPILES.test = item.nodeid
