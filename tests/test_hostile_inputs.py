@@ -191,6 +191,26 @@ def test_the_lock_file_never_exists_without_its_holders_id(tmp_path, monkeypatch
     assert leftovers(tmp_path, "s.nc") == []
 
 
+def test_without_hard_links_the_lock_is_made_in_place(tmp_path, monkeypatch):
+    """A file system without hard links (FAT: link says EPERM) still gets its lock, with the
+    holder's id, and nothing left beside the target."""
+    import errno
+
+    from sweep import resources
+
+    def no_link(source, target):
+        raise OSError(errno.EPERM, os.strerror(errno.EPERM))
+
+    spy = type("os", (), {name: staticmethod(no_link) if name == "link" else getattr(os, name)
+                          for name in dir(os) if not name.startswith("__")})
+    monkeypatch.setattr(resources, "os", spy)
+    path = resources.lock_path(tmp_path / "s.nc")
+    with resources.target_lock(tmp_path / "s.nc"):
+        assert path.read_text() == f"{os.getpid()}\n"
+        assert leftovers(tmp_path, "s.nc") == [".s.nc.lock"]
+    assert leftovers(tmp_path, "s.nc") == []
+
+
 #: one contender for a lock: waits for the start file, takes the lock or names its holder
 CONTENDER = """
 import os, sys, time
