@@ -9,10 +9,12 @@ write a status code (``kernels.status``) and NaN outputs.
 #: by zero gives inf/NaN (then a status code) instead of raising ZeroDivisionError, and
 #: costs no check. No fastmath: results must be bit-identical whatever the block length.
 KERNEL_OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
-#: functions called only from other kernels: no Python wrapper is generated for them (it
-#: cost a fifth of the pendulum's compile time), and no cache file of their own (their code
-#: is in the cache of the kernel that calls them); call them from Python through a kernel
-INNER_OPTIONS = dict(KERNEL_OPTIONS, no_cpython_wrapper=True, cache=False)
+#: functions called only from other kernels: no Python or C wrapper is generated for them
+#: (the Python one cost a fifth of the pendulum's compile time), no cache file of their own
+#: (their code is in the cache of the kernel that calls them), and no machine code of their
+#: own (kernels/linking.py); call them from Python through a kernel
+INNER_OPTIONS = dict(KERNEL_OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True,
+                     cache=False)
 #: one-line accessors and event functions: inlined into their callers by numba, so that
 #: they are not compiled, linked and finalised as functions of their own (half the
 #: pendulum's compile units)
@@ -27,6 +29,7 @@ INLINE_OPTIONS = dict(INNER_OPTIONS, inline="always")
 # with bool(False). tests/test_boundary.py checks that each function compiles once.
 
 
-from kernels import cache  # noqa: E402  (the cache locator, before any kernel is made)
+from kernels import cache, linking  # noqa: E402  (before any kernel is made)
 
 cache.install()
+linking.install()
