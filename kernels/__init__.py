@@ -15,6 +15,9 @@ KERNEL_OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 #: own (kernels/linking.py); call them from Python through a kernel
 INNER_OPTIONS = dict(KERNEL_OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=True,
                      cache=False)
+#: numba overloads written for a type (kernels/impact/tuples.py): compiled, like inner
+#: kernels, without wrappers, so without machine code of their own
+OVERLOAD_OPTIONS = dict(no_cpython_wrapper=True, no_cfunc_wrapper=True)
 #: one-line accessors and event functions: inlined into their callers by numba, so that
 #: they are not compiled, linked and finalised as functions of their own (half the
 #: pendulum's compile units)

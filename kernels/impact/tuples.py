@@ -16,6 +16,8 @@ import math
 from numba.core import types
 from numba.extending import overload
 
+from kernels import OVERLOAD_OPTIONS
+
 
 def _compile(name: str, args: str, body: str, prelude: str = ""):
     namespace = {"math": math}
@@ -78,20 +80,20 @@ def _products(m: int, i: int) -> str:
     return " + ".join(f"coefs[{j}] * ks[{j}][{i}]" for j in range(m))
 
 
-@overload(lincomb)
+@overload(lincomb, jit_options=OVERLOAD_OPTIONS)
 def _lincomb(y, h, coefs, ks):
     n, m = _length(y), _length(coefs)
     return _compile("lincomb", "y, h, coefs, ks",
                     _tuple([f"y[{i}] + h * ({_products(m, i)})" for i in range(n)]))
 
 
-@overload(from_row)
+@overload(from_row, jit_options=OVERLOAD_OPTIONS)
 def _from_row(like, row, offset):
     return _compile("from_row", "like, row, offset",
                     _tuple([f"row[offset + {i}]" for i in range(_length(like))]))
 
 
-@overload(weighted)
+@overload(weighted, jit_options=OVERLOAD_OPTIONS)
 def _weighted(h, coefs, ks):
     n, m = _length(ks.types[0] if hasattr(ks, "types") else ks.dtype), _length(coefs)
     return _compile("weighted", "h, coefs, ks",
@@ -115,15 +117,15 @@ def _cubic(name: str, weights: str, term: str):
     return implementation
 
 
-overload(hermite)(_cubic(
+overload(hermite, jit_options=OVERLOAD_OPTIONS)(_cubic(
     "hermite", _HERMITE_WEIGHTS,
     "(w0 * y0[{i}] + w1 * h * f0[{i}] + w2 * y1[{i}] + w3 * h * f1[{i}])"))
-overload(hermite_slope)(_cubic(
+overload(hermite_slope, jit_options=OVERLOAD_OPTIONS)(_cubic(
     "hermite_slope", _SLOPE_WEIGHTS,
     "(w0 * y0[{i}] / h + w1 * f0[{i}] + w2 * y1[{i}] / h + w3 * f1[{i}])"))
 
 
-@overload(relative_scales)
+@overload(relative_scales, jit_options=OVERLOAD_OPTIONS)
 def _relative_scales(y0, y1, rtol, atol):
     n = _length(y0)
     return _compile("relative_scales", "y0, y1, rtol, atol",
@@ -131,7 +133,7 @@ def _relative_scales(y0, y1, rtol, atol):
                             for i in range(n)]))
 
 
-@overload(error_norm)
+@overload(error_norm, jit_options=OVERLOAD_OPTIONS)
 def _error_norm(err, scales):
     n = _length(err)
     total = " + ".join(f"(err[{i}] / scales[{i}]) ** 2" for i in range(n))
