@@ -50,7 +50,7 @@ def _environment_module(library):
     return ll.parse_assembly(str(module))
 
 
-#: what is patched: numba's CPU context and JIT library (numba 0.59 to 0.68 at least)
+#: what is patched: numba's CPU context and JIT library (written against numba 0.68)
 _NEEDED = {"CPUContext": ("get_executable",),
            "JITCodeLibrary": ("_optimize_final_module", "_finalize_final_module",
                               "_finalize_dynamic_globals", "_verify_declare_only_symbols"),
