@@ -18,7 +18,7 @@ whole tree instead of one per level. A kernel called from Python, or a ``cfunc``
 finalised as before.
 
 With a numba whose internals differ (the names patched below), nothing is changed: the
-compile is slower, the results the same. tests/test_boundary.py checks that the patch is
+compile is slower, the results the same. tests/test_linking.py checks that the patch is
 in place, that a kernel calling lean ones and a ``cfunc`` run, and
 benchmarks/reference_atlases.py that the atlases are unchanged.
 """
