@@ -3,10 +3,13 @@
 A model keeps its own state size (2 for a pendulum at constant rotor speed, 4 with the rotor)
 as a tuple: in numba a tuple lives in registers, and a 4-tuple step ran markedly faster than
 the same step on a 4-element array. numba has no elementwise tuple arithmetic, so each function
-below is an ``overload`` that writes straight-line code for the tuple's length, with the
-same order of operations as a hand-written component (``y + h * (a1 k1 + a2 k2)``).
-They are left to LLVM to inline, not inlined in numba's IR: on the 20-component state of
-the variational equations IR inlining made type inference the bulk of the compile, and
+below writes straight-line code for the tuple's length, with the same order of operations as
+a hand-written component (``y + h * (a1 k1 + a2 k2)``). The Runge-Kutta stages (``lincomb``,
+``weighted``) are typed by one rule and lowered as LLVM instructions in the caller: typed as
+numba functions, their n x m products (20 x 12 on DOP853's variational equations) were
+typed one by one, the largest share of the stability example's compile. The others are
+``overload``s, left to LLVM to inline, not inlined in numba's IR: on the 20-component state
+of the variational equations IR inlining made type inference the bulk of the compile, and
 the steps run as fast.
 Plain-Python versions of the same functions serve tests and callers outside numba.
 """
@@ -14,7 +17,7 @@ Plain-Python versions of the same functions serve tests and callers outside numb
 import math
 
 from numba.core import types
-from numba.extending import overload
+from numba.extending import lower_builtin, overload, type_callable
 
 from kernels import OVERLOAD_OPTIONS
 
@@ -76,28 +79,69 @@ def _length(tup):
     return tup.count if isinstance(tup, types.UniTuple) else len(tup.types)
 
 
-def _products(m: int, i: int) -> str:
-    return " + ".join(f"coefs[{j}] * ks[{j}][{i}]" for j in range(m))
+def _of_numbers(tup, n=None) -> bool:
+    """Whether a numba type is a tuple of real numbers (n of them where given)."""
+    return (isinstance(tup, types.BaseTuple) and (n is None or _length(tup) == n)
+            and all(isinstance(t, (types.Float, types.Integer)) for t in tup.types))
 
 
-@overload(lincomb, jit_options=OVERLOAD_OPTIONS)
-def _lincomb(y, h, coefs, ks):
-    n, m = _length(y), _length(coefs)
-    return _compile("lincomb", "y, h, coefs, ks",
-                    _tuple([f"y[{i}] + h * ({_products(m, i)})" for i in range(n)]))
+def _combination_type(h, coefs, ks, y=None):
+    """The type of lincomb (with y) or weighted: n floats, for states ks (and y) of n
+    numbers each and one coefficient per state; None (numba then says no match) else."""
+    if not (isinstance(h, types.Number) and _of_numbers(coefs)
+            and isinstance(ks, types.BaseTuple) and 0 < _length(ks) == _length(coefs)):
+        return None
+    n = _length(ks.types[0])
+    if not all(_of_numbers(k, n) for k in ks.types) or not (y is None or _of_numbers(y, n)):
+        return None
+    return types.UniTuple(types.float64, n)
+
+
+@type_callable(lincomb)
+def _type_lincomb(context):
+    def typer(y, h, coefs, ks):
+        return _combination_type(h, coefs, ks, y)
+    return typer
+
+
+@type_callable(weighted)
+def _type_weighted(context):
+    def typer(h, coefs, ks):
+        return _combination_type(h, coefs, ks)
+    return typer
+
+
+@lower_builtin(lincomb, types.BaseTuple, types.Number, types.BaseTuple, types.BaseTuple)
+@lower_builtin(weighted, types.Number, types.BaseTuple, types.BaseTuple)
+def _lower_combination(context, builder, sig, args):
+    """lincomb or weighted (by the count of its arguments) as LLVM instructions in the
+    caller, in the order of the written sum: y[i] + h * ((c0 k0[i] + c1 k1[i]) + ...)."""
+    *state, (h_type, h), (coefs_type, coefs), (ks_type, ks) = zip(sig.args, args)
+    f8 = types.float64
+
+    def element(value, tuple_type, i):
+        return context.cast(builder, builder.extract_value(value, i), tuple_type.types[i], f8)
+
+    h = context.cast(builder, h, h_type, f8)
+    terms = [(element(coefs, coefs_type, j), builder.extract_value(ks, j), ks_type.types[j])
+             for j in range(_length(coefs_type))]
+    out = []
+    for i in range(_length(sig.return_type)):
+        total = None
+        for c, k, k_type in terms:
+            product = builder.fmul(c, element(k, k_type, i))
+            total = product if total is None else builder.fadd(total, product)
+        value = builder.fmul(h, total)
+        for y_type, y in state:  # lincomb's y: none for weighted
+            value = builder.fadd(element(y, y_type, i), value)
+        out.append(value)
+    return context.make_tuple(builder, sig.return_type, out)
 
 
 @overload(from_row, jit_options=OVERLOAD_OPTIONS)
 def _from_row(like, row, offset):
     return _compile("from_row", "like, row, offset",
                     _tuple([f"row[offset + {i}]" for i in range(_length(like))]))
-
-
-@overload(weighted, jit_options=OVERLOAD_OPTIONS)
-def _weighted(h, coefs, ks):
-    n, m = _length(ks.types[0] if hasattr(ks, "types") else ks.dtype), _length(coefs)
-    return _compile("weighted", "h, coefs, ks",
-                    _tuple([f"h * ({_products(m, i)})" for i in range(n)]))
 
 
 _HERMITE_WEIGHTS = ("    t = s / h\n    t2, t3 = t * t, t * t * t\n"
