@@ -95,7 +95,10 @@ def against(names: list[str], tree: str, rounds: int, label: str = "") -> None:
         result["examples"][name] = {"this_cpu_s": this, "other_cpu_s": other,
                                     "ratio": this / other, "this_warm_cpu_s": warm_this,
                                     "other_warm_cpu_s": warm_other,
-                                    "warm_ratio": warm_this / warm_other}
+                                    "warm_ratio": warm_this / warm_other,
+                                    # what a first run costs over a warm one (issue 60's bar)
+                                    "this_cold_minus_warm_cpu_s": this - warm_this,
+                                    "other_cold_minus_warm_cpu_s": other - warm_other}
         print(f"{name:26s} {this:10.1f} {other:7.1f} {this / other:6.2f} "
               f"{warm_this:10.1f} {warm_other:7.1f} {warm_this / warm_other:6.2f}", flush=True)
         result["load_after"] = os.getloadavg()[0]

@@ -18,12 +18,9 @@ INNER_OPTIONS = dict(KERNEL_OPTIONS, no_cpython_wrapper=True, no_cfunc_wrapper=T
 #: numba overloads written for a type (kernels/impact/tuples.py): compiled, like inner
 #: kernels, without wrappers, so without machine code of their own
 OVERLOAD_OPTIONS = dict(no_cpython_wrapper=True, no_cfunc_wrapper=True)
-#: functions inlined into their callers in numba's IR, for loops over lanes alone (the
-#: lane functions of kernels/elementary.py, benchmarks/bench_step.py), so that LLVM
-#: vectorises the loop. Every other kernel is compiled as a function of its own and
-#: left to LLVM to inline: IR inlining typed the callee again at each call site, and with
-#: inner kernels finalised lean (kernels/linking.py) a function of its own costs less
-#: (docs/performance.md)
+#: one-line accessors and event functions: inlined into their callers by numba, so that
+#: they are not compiled, linked and finalised as functions of their own (half the
+#: pendulum's compile units)
 INLINE_OPTIONS = dict(INNER_OPTIONS, inline="always")
 
 # Constant arguments between kernels: numba types a literal (0, True, a module's integer

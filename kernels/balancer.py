@@ -18,7 +18,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.block import design_block
 from kernels.declaration import POSITIVE, Boundary, Mechanism, Output, Quantity
 from kernels.fourbar import closure_vectors, crank_turns_fully, vector_kinematics
@@ -431,7 +431,7 @@ def response(a, b, gamma0, f, r, eta, neutral, tol, res_tol, forced, out):
     return S.ok
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): the steady response of its geometry's Fourier
     coefficients (computed once per geometry of the block, settings.geometry_index[i])."""

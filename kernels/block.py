@@ -7,7 +7,9 @@ A kernel makes its block once, at import, as a module-level function of its own 
 The loop is written once, here, and defined in the kernel's module around its point
 function: a point function passed to a cached loop as an argument is a dynamic global to
 numba's cache (compiled again in every process), and a loop compiled as a closure of its
-own under a module-level wrapper is one more function to compile on every first run.
+own under a module-level wrapper is one more function to compile on every first run. The
+point functions are declared with ``INLINE_OPTIONS``: inlined into the loop, they are not a
+compile unit of their own either (benchmarks/compile_events.py).
 """
 
 import numba

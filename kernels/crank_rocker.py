@@ -13,7 +13,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, KERNEL_OPTIONS
 from kernels.block import block_arrays, design_block
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Boundary, Mechanism, Output,
                                  Quantity, assembly_branch, geometry_tol, path,
@@ -486,13 +486,13 @@ def working_transmission_angle(lam0, lam2, lam3, phi_star, window, mu_opposite, 
     return min(mu_edge, mu_opposite)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): its linkage's outputs by name, its status."""
     return _linkage_outputs(pr, settings, out).status
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design_with_profiles(i, pr, settings, out, prof):
     """One grid point with its profiles over settings.angles ([CR] Fig. 2)."""
     lp = _linkage_outputs(pr, settings, out)
@@ -501,7 +501,7 @@ def design_with_profiles(i, pr, settings, out, prof):
     return lp.status
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _linkage_outputs(pr, settings, out):
     """The point's LinkagePoint, its outputs written by name."""
     lp = linkage_point(
@@ -526,7 +526,7 @@ def _linkage_outputs(pr, settings, out):
     return lp
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _rocker_profiles(lp, settings, prof):
     """u31 and the rocker's angle over the cycle ([CR] Fig. 2) into prof."""
     angles = settings.angles

@@ -20,7 +20,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels import kinetostatics as ks
 from kernels.block import block_arrays, design_block
 from kernels.crank_rocker import S as LINKAGE
@@ -248,7 +248,7 @@ def design_of(full):
     run that asks none of them compiles without them, a third less (numba prunes the
     branches on the constant)."""
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def design(i, pr, settings, out, prof):
         r = pr[P.R]
         law = int(pr[P.impact_law])

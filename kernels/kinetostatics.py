@@ -20,7 +20,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.block import block_arrays, design_block
 from kernels.crank_rocker import impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, SIGMA_IMPACT, Mechanism, Output,
@@ -516,7 +516,7 @@ def cycle_profiles(pr, branch, res, tol, base, kind, count, start, angles, prof)
         prof[F.balancing_moment, j] = res[R_MB]
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): status, the scalar outputs (out) and the
     profiles (prof[k, j])."""

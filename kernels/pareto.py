@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 
 
 @njit(**INNER_OPTIONS)
@@ -100,7 +100,7 @@ def _front_of_three(values, order, keep):
         i = j + 1
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _dominates(values, a, b):
     better = False
     for j in range(values.shape[1]):

@@ -20,7 +20,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.block import block_arrays, design_block
 from kernels.crank_rocker import branch_values, impact_branch
 from kernels.declaration import (BRANCH_FLAGS, POSITIVE, Mechanism, Output, Quantity,
@@ -309,7 +309,7 @@ def _cycle_peaks(data, n_samples, impacts, peak):
     return peak, peak2
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py): its outputs by name, its profiles over the 4 pi
     cycle, its status."""

@@ -27,7 +27,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels import kinetostatics as ks
 from kernels import six_link as sl
 from kernels.block import block_arrays, design_block
@@ -448,7 +448,7 @@ def forces_point(pr, settings, out, prof):
     return S.ok
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def design(i, pr, settings, out, prof):
     """One grid point (kernels/block.py)."""
     return forces_point(pr, settings, out, prof)

@@ -20,7 +20,7 @@ import math
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INLINE_OPTIONS
 from kernels.impact import Contact, System
 from kernels.impact.flight import make_flight
 from kernels.impact.attractors import radical_inverse
@@ -28,12 +28,12 @@ from kernels.impact.outcomes import NO_COST
 from kernels.pendulum.tools import never, no_edge, no_slope, stop_flight
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def same(data):
     return data
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def no_accumulation_tangent(tangent, d, t, y, data, p, r):
     return False, t, y
 
@@ -46,54 +46,54 @@ def relative_stop(model):
 
     flight = stop_flight(model)  # the rotor stop's flight, at the stop's own angle
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def first(p, data, start):
         t, y = compose(0.0, 0.0, 1.0, data[0], 0.0)
         return t, y, data
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def key(t, y, data, p):
         return psi_of(y), dpsi_of(y)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def from_key(x, t, y, data, p):
         return t, y
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def jacobian(t, y, data):
         return 0.0, 1.0  # the relative speed: the stop turns with the rotor
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def normal_speed(t, y, data, p):
         return dpsi_of(y)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def normal_acceleration(t, y, data, p):
         return abs(accelerations(t, y, p)[1])
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def gap_rate_after(t, y, data, p):
         return dpsi_of(y)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def pressed(t, y, data, p):
         return accelerations(t, y, p)[1] > 0.0
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def settle(t, y, data, p, dt):
         """The chatter's accumulation point dt later: on the stop, at rest on it."""
         w = rotor_speed(y)
         return compose(t + dt, rotor_angle(t, y) + w * dt, w, data[0], 0.0)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def stick(t, y, data, p, settings, refine):
         return False, t, y, data, abs(psi_of(y)), 0.0, NO_COST
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def event_gradient(t, y, data):
         return 0.0, 1.0, 0.0  # g = psi - psi_s
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def no_slide_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
         return False  # the test tool's stick carries no tangent (its multiplier is NaN)
 
@@ -119,20 +119,20 @@ def mirrored_stop(model):
     rotor_angle, rotor_speed, monitor = model.rotor_angle, model.rotor_speed, model.monitor
     critical_speed, accelerations = model.critical_speed, model.accelerations
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def values(t, y, data):
         return -psi_of(y), math.pi - psi_of(y)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def rates(t, y, dy, data):
         rate = monitor(t, y, dy)[1]
         return -rate, -rate
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def on_event(e, t, y, f, data, p):
         return True, data
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def start_gap(t, y, f, data, p):
         angle, rate, accel = monitor(t, y, f)
         return -rate, -accel
@@ -140,54 +140,54 @@ def mirrored_stop(model):
     flight = make_flight(System(model.rhs, model.scales, values, rates, (1, -1), on_event,
                                 start_gap, monitor))[0]
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def first(p, data, start):
         """Start 0: at rest on the stop; start j: arriving with psi' = -2 (1 + k) x_j."""
         speed = 2.0 * (1.0 + data[1]) * radical_inverse(start, int(2))
         t, y = compose(0.0, 0.0, p[-1], 0.0, -speed)
         return t, y, data
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def key(t, y, data, p):
         return rotor_speed(y), -dpsi_of(y)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def from_key(x, t, y, data, p):
         return compose(t, rotor_angle(t, y), x[0], 0.0, -x[1])
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def jacobian(t, y, data):
         return 1.0 + data[1], -1.0
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def normal_speed(t, y, data, p):
         return (1.0 + data[1]) * rotor_speed(y) - dpsi_of(y)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def normal_acceleration(t, y, data, p):
         return abs(accelerations(t, y, p)[1])
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def gap_rate_after(t, y, data, p):
         return -dpsi_of(y)  # the pendulum must leave the stop upwards
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def in_place(t, y, data, p, dt):
         return t, y
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def no_slide(t, y, data, p, settings, refine):
         return True, t, y, data, 0.0, 0.0, NO_COST
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def escapes_before(t, y, data, p):
         return dpsi_of(y) >= critical_speed(p)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def event_gradient(t, y, data):
         return 0.0, -1.0, 0.0  # g = -psi
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def no_slide_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
         return True
 

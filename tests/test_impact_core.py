@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INLINE_OPTIONS
 from kernels.impact import System
 from kernels.impact.events import ILLINOIS_ITERATIONS, make_illinois
 from kernels.impact.flight import make_flight, make_timed_flight
@@ -33,32 +33,32 @@ OSCILLATOR, FREE_FALL = (1.0, 0.0), (0.0, 1.0)  # p = (c, g)
 UPPER, LOWER = 0, 1  # the events: x rising through data[0], x falling through data[1]
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def line_rhs(y, p):
     return y[1], -p[0] * y[0] - p[1]
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def line_values(t, y, data):
     return y[0] - data[0], y[0] - data[1]
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def line_rates(t, y, dy, data):
     return dy[0], dy[0]
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def terminal(e, t, y, f, data, p):
     return True, data
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def line_start(t, y, f, data, p):
     return f[0], f[1]
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def line_monitor(t, y, f):
     return y[0], f[0], f[1]
 
@@ -74,27 +74,27 @@ def line_flight(t, y, p, data, s, refine):
     return _line_flight(t, y, p, data, s, refine)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def blowup_rhs(y, p):
     return (y[0] * y[0],)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def blowup_values(t, y, data):
     return (y[0] + 1.0,)  # never crosses: the flight runs until its steps underflow
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def blowup_rates(t, y, dy, data):
     return (dy[0],)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def blowup_start(t, y, f, data, p):
     return 0.0, 0.0
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def blowup_monitor(t, y, f):
     return y[0], f[0], 0.0
 
@@ -257,17 +257,17 @@ def test_grazing_contact_is_found_with_a_window_of_a_hundredth_of_a_step(phase):
     assert abs(fl.t - (0.5 * math.pi - delta)) < 0.5 * delta  # on the window's near side
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def cubic_rhs(y, p):
     return y[1], p[0] + p[1] * y[2], 1.0  # x'' = a + b t, with y[2] = t
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def cubic_values(t, y, data):
     return (y[0],)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def cubic_rates(t, y, dy, data):
     return (dy[0],)
 
@@ -415,12 +415,12 @@ def test_a_timed_flight_into_a_blowup_or_past_its_budget_fails():
     assert not blowup_timed(0.9, settings(max_steps=5))[0]
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _linear(x, data):
     return x - data
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _step(x, data):
     return 1.0 if x > data else -1.0
 

@@ -43,11 +43,11 @@ from collections import namedtuple
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INLINE_OPTIONS
 from kernels.impact.runge_kutta import OTHER_METHODS
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def no_coast(t_cross, crossings, h, t, y, f, data, p, time_left, memo, closed_form):
     return 0.0, t_cross, y, f, data, memo, 0
 

@@ -6,7 +6,7 @@ from collections import namedtuple
 
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, KERNEL_OPTIONS
 from kernels.impact.outcomes import SEQUENCE_CYCLE
 
 #: two section states are one attractor's when they agree to this (relative to max(1, |x|))
@@ -16,7 +16,7 @@ ATTRACTOR_TOL = 1e-6
 KNOWN = namedtuple("KnownColumns", ["outcome", "period", "chatter", "key"])(0, 1, 2, 3)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def relative_distance(x, y, scale):
     """max_i |x_i - y_i| / max(1, |scale_i|): how far apart two section states are, relative
     where a component is large and absolute where it is small (the period's repeat, a

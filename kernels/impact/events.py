@@ -32,7 +32,7 @@ flight.py): the interpolant is only O(h^4) accurate.
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INNER_OPTIONS, INLINE_OPTIONS
 from kernels.impact.tuples import hermite, hermite_slope
 
 SUBSTEP_SAMPLES = 4  # interior sign samples per step
@@ -40,7 +40,7 @@ BISECTIONS = 60  # for an extremum inside a sample interval: 2^-60 of it
 ILLINOIS_ITERATIONS = 100
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def crossed(before, after, direction):
     """Does g cross 0 from ``before`` to ``after`` in ``direction``?"""
     if direction > 0:
@@ -103,13 +103,13 @@ def make_event_roots(values, rates, step):
     step), Illinois on the interpolant and on exact partial steps, and ``extremum`` (where
     g turns inside an interval, by bisection on the interpolant's g')."""
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def on_interpolant(s, data):
         """g of event e on the step's interpolant at s; data = (e, step, context)."""
         e, (t, h, y0, f0, y1, f1), (system, p, method, slack) = data
         return values(t + s, hermite(s, h, y0, f0, y1, f1), system)[e]
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def on_partial_step(s, data):
         """g of event e on the exact partial step of length s from the step's start; data =
         (e, step, context)."""
@@ -120,7 +120,7 @@ def make_event_roots(values, rates, step):
     root_on_interpolant = make_illinois(on_interpolant)
     root_on_partial_steps = make_illinois(on_partial_step)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def rate_on_interpolant(s, data):
         e, st, system = data
         t, h, y0, f0, y1, f1 = st

@@ -31,7 +31,7 @@ from collections import namedtuple
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS
 from kernels.extrema import peak_search
 from kernels.impact.events import make_bisection, make_locator
 from kernels.impact.outcomes import (FLIGHT_EVENT, FLIGHT_HORIZON, FLIGHT_MAX_STEPS,
@@ -62,12 +62,12 @@ Flight = namedtuple("Flight", ["outcome", "event", "t", "y", "f", "data", "ampli
                                "peak", "cost"])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _no_length(y, p, length):
     return length
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _never_clear(y, values_now, data, p):
     return 0.0
 
@@ -186,7 +186,7 @@ def make_step_control(system):
     has_clear = has_exact and system.clear_time is not None
     clear_time = system.clear_time if has_clear else _never_clear
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def start_step(t, y, f, data, p, settings, rate):
         # exact steps (runge_kutta.METHOD_EXACT) are as long as the event search allows
         if has_exact and settings.method == METHOD_EXACT:
@@ -196,7 +196,7 @@ def make_step_control(system):
         gap_rate, gap_acceleration = start_gap(t, y, f, data, p)
         return ballistic_cap(h, gap_rate, gap_acceleration)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def next_step(y, values_now, data, p, settings, refine, h, err, after_reject, err_prev):
         if has_exact and settings.method == METHOD_EXACT:
             h = exact_length(y, p, settings.dt)
@@ -210,13 +210,13 @@ def make_step_control(system):
         return accepted_step_size(settings.method, h, settings.dt, err, after_reject,
                                   err_prev)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def events_at(t, y, f, data):
         """The events' values and rates at a point of the flight: a step's start (the
         locator returns them at the step's end, passed on as the next start)."""
         return values(t, y, data), rates(t, y, f, data)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def coast_on(angle, angle1, crossings, t_cross, h_cross, t, h, y1, f1, data, p,
                  horizon_end, memo, closed_form):
         """After a step from t to t + h in which the monitored angle went from ``angle``

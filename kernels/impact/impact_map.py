@@ -54,7 +54,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact.accelerators import (Acceleration, aitken_jump, impacts_past_jump,
                                          make_accelerators)
 from kernels.impact.attractors import KNOWN, captured_by, known_attractor
@@ -113,7 +113,7 @@ Section = namedtuple("Section", ["outcome", "t", "y", "data", "chatter", "amplit
                                  "tangent_ok"])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def ended(steady, count, t, y, data, acceleration):
     """A transient that ended with its result ``steady`` already (no cycle, the constant
     map's, a known one's)."""
@@ -122,7 +122,7 @@ def ended(steady, count, t, y, data, acceleration):
                      jumped=bool(False))
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def on_known(cycle, key, impacts, cost):
     """The Steady of a sequence that reached the section state ``key`` of a known cycle
     (``cycle``: a row of known cycles, columns KNOWN): its outcome, period and chatter;
@@ -133,7 +133,7 @@ def on_known(cycle, key, impacts, cost):
                   peak=0.0, impacts=impacts, cost=cost, margins=NO_MARGINS, key=key)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def no_cycle(outcome, chatter, impacts, cost, key):
     """The Steady of a sequence that ended without a cycle."""
     return Steady(outcome=outcome, period=0, chatter=chatter, amplitude=0.0, flight_time=0.0,
@@ -141,7 +141,7 @@ def no_cycle(outcome, chatter, impacts, cost, key):
                   cost=cost, margins=NO_MARGINS, key=key)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def of_cycle(period, c, impacts, cost):
     """The Steady of a sequence whose cycle of ``period`` sections is ``c`` (a Cycle, or a
     Steady: its values and margins)."""
@@ -151,7 +151,7 @@ def of_cycle(period, c, impacts, cost):
                   impacts=impacts, cost=cost, margins=c.margins, key=c.key)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def with_cost(s, impacts, cost):
     """The Steady ``s`` with its impacts from the start and its cost replaced (a sequence
     solved in stages: the impacts one stage counted, the cost of all)."""
@@ -168,7 +168,7 @@ def make_impact_map(c, jump_early, stability=False, known_cycles=True, second_st
     make_timed_flight);
     without ``known_cycles`` a sequence never looks for the cycles of other starts (a
     single start: their search is not compiled in); without ``second_stage`` the sequence
-    from a state (``settle``) is called only by ``steady``. The parts
+    from a state (``settle``) is called only by ``steady`` and inlined into it. The parts
     that do not depend on the starts and the stages (the law, a contact, a section, the
     cycle, the transient, the tangent's tracker) are made once per Contact and options
     (functools.cache), so that a process making several entry points of one system
@@ -469,7 +469,9 @@ def make_steady(c, jump_early, transient, cycle, second_stage=True):
     same from the state (t, y, data); each also returns the state its cycle ran from."""
     first, key_of, from_key, smooth = c.first, c.key, c.from_key, c.smooth
 
-    @njit(**INNER_OPTIONS)
+    # one caller (steady) where no second stage goes on from a state: inlined into it, one
+    # function fewer to compile
+    @njit(**(INNER_OPTIONS if second_stage else INLINE_OPTIONS))
     def settle(p, data, r, settings, repeat_tol, log, t, y, known):
         """The sequence from (t, y, data) to its steady cycle, within settings.max_impacts,
         its cycle's section states repeating to ``repeat_tol``; log[j] gets (rotor angle

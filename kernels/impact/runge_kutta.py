@@ -161,7 +161,7 @@ def make_stepper(rhs, scales, exact=None, methods=OTHER_METHODS, inline=False):
     return step
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def dop853_error(rms5, rms3):
     """DOP853's error measure from the RMS errors of its 5th- and 3rd-order embedded
     solutions, rms5^2 / sqrt(rms5^2 + 0.01 rms3^2) (Hairer-Norsett-Wanner II.10): it
@@ -171,7 +171,7 @@ def dop853_error(rms5, rms3):
     return rms5 * rms5 / math.sqrt(denominator) if denominator > 0.0 else 0.0
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def low_order(method):
     """The method a stepper made without DOP853 takes for ``method``: DOPRI5 for DOP853,
     so that its step-size control is the step's."""
@@ -211,7 +211,7 @@ def make_step_size_rule(power, inline=False):
     return next_step
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def libm_power(x, a):
     """x^a by the platform's pow (the kernels' step-size control)."""
     return x ** a

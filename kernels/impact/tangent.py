@@ -37,7 +37,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INNER_OPTIONS, INLINE_OPTIONS
 from kernels.impact.flight import make_timed_flight
 from kernels.impact.runge_kutta import OTHER_METHODS
 from kernels.impact.tuples import relative_scales
@@ -57,7 +57,7 @@ Tracker = namedtuple("Tracker", ["start", "flight", "law", "multiplier"])
 
 def _generated(name: str, args: str, body: list[str], namespace: dict):
     exec(f"def {name}({args}):\n" + "\n".join("    " + line for line in body), namespace)
-    return njit(**INNER_OPTIONS)(namespace[name])
+    return njit(**INLINE_OPTIONS)(namespace[name])
 
 
 def make_variational(model, n, methods=OTHER_METHODS):
@@ -310,23 +310,23 @@ def make_tangent_law(c):
 
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _no_start(t, y, data, basis):
     return int(0), np.zeros(MAX_SECTION_DIMENSION, np.int64)  # int(): see kernels/__init__.py
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _no_flight(tangent, d, t0, y0, t1, y1, f1, data1, p, settings):
     return True
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _no_law(tangent, d, t, y, data, t_law, y_law, t1, y1, data1, p, r, slid, zeno,
             settings):
     return True
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _no_multiplier(tangent, d, rows):
     return math.nan, math.nan
 

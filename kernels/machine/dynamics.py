@@ -14,7 +14,7 @@ import math
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS
 from kernels.fourbar import CHANGE_POINT_C, closure_vectors
 from kernels.machine.declaration import MOTOR_CONSTANT
 
@@ -45,7 +45,7 @@ def u31_on_cycle(sh, ch, lk):
             - lk.sigma * l0 * l1 * (d2 + l2 * l2 - l3 * l3) / d2 * ratio)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _factor_p(lk):
     """The constant part of P, exactly 0 for type c: (l2 + l3 - l0 - l1)(l0 + l1 + l2 + l3)."""
     if lk.kind == CHANGE_POINT_C:
@@ -54,7 +54,7 @@ def _factor_p(lk):
     return (l2 + l3 - l0 - l1) * (l2 + l3 + l0 + l1)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _factor_q(lk):
     """The constant part of Q, exactly 0 for types a and b."""
     if lk.kind != CHANGE_POINT_C:
@@ -123,7 +123,7 @@ def generalized_force(c1, s1, c2, s2, c3, s3, u21, u31, m):
     return qg + qe
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def motor_torque(w, m):
     """The motor's torque M(omega1): M0 (1 - omega1/omega_idle), or M0 for a constant
     torque."""
@@ -132,7 +132,7 @@ def motor_torque(w, m):
     return m.motor.stall_torque * (1.0 - w / m.motor.idle_speed)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def speed_of(energy, j, m):
     """omega1 from the scaled kinetic energy T/T_ref (0 at or below rest)."""
     return math.sqrt(max(2.0 * energy * m.tref / j, 0.0))

@@ -13,7 +13,7 @@ from collections import namedtuple
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact import System
 from kernels.impact.flight import make_flight, make_timed_flight
 from kernels.impact.outcomes import FLIGHT_EVENT, FLIGHT_MAX_STEPS, FLIGHT_UNDERFLOW
@@ -52,7 +52,7 @@ def revolution_rhs(y, m):
             torque * torque * inv_w / (tref * wref), q / tref)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _speed_slope(y, m):
     """d omega1/dphi1 up to the positive factor 1/(J omega1): M + Q - J' omega1^2 / 2."""
     j, dj, q, u31 = reduced(y[ANGLE], m)
@@ -60,7 +60,7 @@ def _speed_slope(y, m):
     return motor_torque(w, m) + q - 0.5 * dj * w * w
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def revolution_values(t, y, data):
     """Events: 0 the blow (phi1 reaches the end of the cycle), 1 a stall (T falls to 0),
     2 the next speed extremum: d omega1/dphi1 through 0, its sign in data flipped at each
@@ -69,12 +69,12 @@ def revolution_values(t, y, data):
     return t - end, y[ENERGY] - STALL_LEVEL, sign * _speed_slope(y, m)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def revolution_rates(t, y, dy, data):
     return 1.0, dy[ENERGY], math.nan
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def revolution_on_event(e, t, y, f, data, p):
     """The blow and a stall end the revolution; a speed extremum is kept and passed."""
     if e <= 1:
@@ -85,17 +85,17 @@ def revolution_on_event(e, t, y, f, data, p):
     return False, (end, m, min(w_min, w), max(w_max, w), -sign)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def revolution_start(t, y, f, data, p):
     return 0.0, 0.0
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def revolution_monitor(t, y, f):
     return 0.0, 0.0, 0.0
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def revolution_scales(y0, y1, rtol, atol):
     return relative_scales(y0, y1, rtol, atol)
 

@@ -15,7 +15,7 @@ import math
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INNER_OPTIONS, INLINE_OPTIONS
 from kernels.impact import Contact, System, no_coast
 from kernels.impact.flight import EXACT_REACH, Flight, make_flight
 from kernels.impact.attractors import radical_inverse
@@ -118,7 +118,7 @@ def blade_section_start(model):
     rising where G' > 0 (SIDE +1), else falling."""
     compose = model.compose
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def start(key, data, p):
         lower, window, k, level, side = data
         psi, rate, w = key[0], key[1], key[2]
@@ -137,7 +137,7 @@ def lab_window(model, methods=OTHER_METHODS):
     accelerations, response = model.accelerations, model.response
     starting_speed = model.starting_speed
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def values(t, y, data):
         """G against each face, (phi1 - face) + beta: the rotor angle grows without bound,
         and (phi1 + beta) - face would lose the gap's last digits to its magnitude (a
@@ -146,14 +146,14 @@ def lab_window(model, methods=OTHER_METHODS):
         phi1, b = rotor_angle(t, y), beta(psi_of(y), k)
         return (phi1 - (lower + TWO_PI)) + b, (phi1 - lower) + b, abs(psi_of(y)) - math.pi
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def rates(t, y, dy, data):
         k = data[K]
         psi, dpsi = psi_of(y), monitor(t, y, dy)[1]
         g_rate = rotor_speed(y) + h_ratio(psi, k) * dpsi
         return g_rate, g_rate, math.copysign(1.0, psi) * dpsi
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def on_event(e, t, y, f, data, p):
         lower, window, k = data[LOWER], data[WINDOW], data[K]
         if e == 2:
@@ -172,7 +172,7 @@ def lab_window(model, methods=OTHER_METHODS):
         psi, dpsi = psi_of(y), dpsi_of(y)
         return a_phi + h_ratio(psi, k) * a_psi + h_slope(psi, k) * dpsi * dpsi
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def start_gap(t, y, f, data, p):
         k = data[K]
         g_rate = rotor_speed(y) + h_ratio(psi_of(y), k) * dpsi_of(y)
@@ -180,7 +180,7 @@ def lab_window(model, methods=OTHER_METHODS):
 
     speed_bound = model.speed_bound
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def clear_time(y, values_now, data, p):
         """No event within this time (System.clear_time), nor a zero of psi (the coast
         takes the step that holds one as the bound of its time, _swing_coast): each face's
@@ -230,7 +230,7 @@ def lab_window(model, methods=OTHER_METHODS):
     else:
         slide, slide_tangent = constrained_slide(model, gap_change, methods)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def first(p, data, start):
         """Start 0: at rest relative to the rotor on the blade's working face (met rising):
         the first impact at once, as on the rotor stop. Start j: on that face at psi =
@@ -246,27 +246,27 @@ def lab_window(model, methods=OTHER_METHODS):
         t, y = compose(phi1, phi1, w, psi, dpsi)
         return t, y, (lower, window, k, 0.0, 1.0)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def key(t, y, data, p):
         k = data[K]
         return (psi_of(y), rotor_speed(y) + h_ratio(psi_of(y), k) * dpsi_of(y),
                 rotor_speed(y))
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def from_key(key, t, y, data, p):
         return t, y
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def jacobian(t, y, data):
         return 1.0, h_ratio(psi_of(y), data[K])
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def normal_speed(t, y, data, p):
         """G' towards the face (> 0: closing) of the last contact."""
         k, side = data[K], data[SIDE]
         return side * (rotor_speed(y) + h_ratio(psi_of(y), k) * dpsi_of(y))
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def striker_speed(t, y, data, p):
         """The contact point's normal speed rho |G'| in omega1 l_contact units."""
         k = data[K]
@@ -274,15 +274,15 @@ def lab_window(model, methods=OTHER_METHODS):
         return (math.sqrt(k * k + 1.0 + 2.0 * k * math.cos(psi))
                 * abs(rotor_speed(y) + h_ratio(psi, k) * dpsi_of(y)))
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def normal_acceleration(t, y, data, p):
         return abs(free_gap_acceleration(t, y, p, data[K]))
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def gap_rate_after(t, y, data, p):
         return -1.0  # Newton's law on G' always reverses (or zeroes) the approach
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def pressing(t, y, data, p):
         """The free G'' into the face of the last contact, with zero normal speed."""
         k, side = data[K], data[SIDE]
@@ -291,7 +291,7 @@ def lab_window(model, methods=OTHER_METHODS):
                          -rotor_speed(y) / h_ratio(psi, k))
         return side * free_gap_acceleration(tt, on, p, k)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def pressed(t, y, data, p):
         """Does a contact with zero normal speed start a slide? The pressing at the contact,
         or, where it vanishes (at psi = 0 both h' and psi'' vanish: a degenerate touch),
@@ -304,7 +304,7 @@ def lab_window(model, methods=OTHER_METHODS):
         tt, y2 = compose(t, data[LEVEL] - beta(psi, k), rotor_speed(y), psi, dpsi_of(y))
         return pressing(tt, y2, data, p) > 0.0
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def settle(t, y, data, p, dt):
         """The chatter's accumulation point, dt later (the ballistic tail, H6, P-O14): the
         rotor turned on by its speed times dt, psi on the face, no normal speed."""
@@ -349,7 +349,7 @@ def lab_window(model, methods=OTHER_METHODS):
             tangent[DDPSI, j] = -c[DW] / h1 + w * slope1 / (h1 * h1) * dpsi
         return True, t1, y1
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def flight_data(data):
         """The faces around the striker after a contact: behind it if it bounced off the
         face it met rising, ahead if falling; past the face after sliding off its edge."""
@@ -357,16 +357,16 @@ def lab_window(model, methods=OTHER_METHODS):
         new_lower = level - TWO_PI if side > 0.0 else level
         return new_lower, window, k, level, side
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def event_gradient(t, y, data):
         """g = phi1 + beta(psi) - face: (1, h, 0)."""
         return 1.0, h_ratio(psi_of(y), data[K]), 0.0
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def jacobian_slope(t, y, data):
         return 0.0, h_slope(psi_of(y), data[K])
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def edge_distance(t, y, data):
         """How far inside the blade's reach a contact is: window - |psi| [rad]."""
         return data[WINDOW] - abs(psi_of(y))

@@ -8,32 +8,32 @@ import math
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INNER_OPTIONS, INLINE_OPTIONS
 
 #: the blade's data (lower, window, k, level, side): the lower face's lab angle, the reach,
 #: k, the last contact's face level and side (+1 met rising, -1 falling, 0 slid off)
 LOWER, WINDOW, K, LEVEL, SIDE = range(5)
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def beta(psi, k):
     """Polar angle of the contact point ahead of the rotor arm."""
     return math.atan2(math.sin(psi), k + math.cos(psi))
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def h_ratio(psi, k):
     """h = dbeta/dpsi = (1 + k cos psi)/X."""
     return (1.0 + k * math.cos(psi)) / (k * k + 1.0 + 2.0 * k * math.cos(psi))
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def h_slope(psi, k):
     """dh/dpsi = k (1 - k^2) sin psi / X^2."""
     x = k * k + 1.0 + 2.0 * k * math.cos(psi)
     return k * (1.0 - k * k) * math.sin(psi) / (x * x)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def h_curvature(psi, k):
     """d2h/dpsi2 = k (1 - k^2) (X cos psi + 4 k sin^2 psi)/X^3."""
     s, c = math.sin(psi), math.cos(psi)

@@ -11,7 +11,7 @@ import math
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INNER_OPTIONS, INLINE_OPTIONS
 from kernels.extrema import peak_search
 from kernels.impact import System
 from kernels.impact.events import make_illinois
@@ -26,7 +26,7 @@ from kernels.pendulum.blade_geometry import SIDE, beta, h_curvature, h_ratio, h_
 from kernels.pendulum.tools import TWO_PI
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _fixed_exit_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
     """A slide at constant rotor speed ends where the face alone decides (the release, or
     the blade's edge): its exit does not depend on its entry."""
@@ -43,7 +43,7 @@ def gap_acceleration_change(model):
     differential = make_acceleration_differential(model, 2 if model.driven else 4)
     psi_of, dpsi_of = model.psi, model.dpsi
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def change(y, p, k, a_psi, c):
         psi, v = psi_of(y), dpsi_of(y)
         hs = h_slope(psi, k)
@@ -58,7 +58,7 @@ def gap_acceleration_change(model):
 SLIDE_SAMPLES = 128  # pressing samples along a kinematic slide (a release is bracketed)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def after_slide(released, data):
     """The blade data after a slide: off the blade's edge the striker is past the face, in
     the direction it pressed (side 0: no face was just met)."""
@@ -138,13 +138,13 @@ def constrained_slide(model, gap_change, methods):
     rotor_speed = model.rotor_speed
     carry = make_event_carry(2)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def on_face(t, s, sp):
         p, level, k = sp
         psi, dpsi = s
         return compose(t, level - beta(psi, k), -h_ratio(psi, k) * dpsi, psi, dpsi)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def face_terms(t, s, sp):
         """On the face at s: the state y, h, the free accelerations, M^-1 J^T, the free
         G'' that the contact force cancels, and psi'' on the face."""
@@ -163,30 +163,30 @@ def constrained_slide(model, gap_change, methods):
         y, hr, a_psi, x_phi, x_psi, g2, acc = face_terms(t, s, sp)
         return acc, g2
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def slide_rhs(s, sp):
         acc, g2 = slide_state(0.0, s, sp)
         return s[1], acc
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def slide_values(t, s, data):
         sp, side, window = data
         acc, g2 = slide_state(t, s, sp)
         return side * g2, abs(s[0]) - window
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def slide_rates(t, s, ds, data):
         return math.nan, math.copysign(1.0, s[0]) * ds[0]
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def slide_on_event(e, t, s, f, data, p):
         return True, data
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def slide_start(t, s, f, data, p):
         return 0.0, 0.0
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def slide_monitor(t, s, f):
         return s[0], f[0], f[1]
 
@@ -227,7 +227,7 @@ def constrained_slide(model, gap_change, methods):
         acc_v = dpsi_v - x_psi * g2_v / jx
         return acc, acc_psi, acc_v, g2, g2_psi, g2_v
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def face_jacobian(s, sp):
         acc, acc_psi, acc_v, g2, g2_psi, g2_v = face_field(s, sp)
         return 0.0, 1.0, acc_psi, acc_v

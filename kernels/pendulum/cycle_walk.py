@@ -30,7 +30,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.cache import module_level
 from kernels.impact.impact_map import MAX_CONTACTS_PER_SECTION, make_contact, make_restitute
 from kernels.impact.outcomes import FLIGHT_EVENT
@@ -63,19 +63,19 @@ SECTION_STARTS = {"rotor_stop": stop_section_start, "lab_window": blade_section_
 OnFace = namedtuple("OnFace", ["rotor", "swing", "force"])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _radius(psi, k):
     return math.sqrt(k * k + 1.0 + 2.0 * k * math.cos(psi))  # O to the tip, in l2
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _normal(geometry, psi):
     """The face's normal (along G) in the pendulum's axes: (-sin delta, cos delta)."""
     delta = math.atan2(math.sin(psi), geometry.l1 + math.cos(psi)) - psi
     return -math.sin(delta), math.cos(delta)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _driven_on_face(psi, dpsi, free, geometry):
     """OnFace at constant rotor speed from psi''_free."""
     l1, l_cm, j_c = geometry
@@ -88,14 +88,14 @@ def _driven_slide_walk(free):
     """The walk along the face of a constant-speed model whose psi''_free is
     ``free(psi, psi', p)``: state (psi, psi', work)."""
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def rhs(y, q):
         p, geometry = q
         face = _driven_on_face(y[0], y[1], free(y[0], y[1], p), geometry)
         along, across, moment = hinge_and_moment(geometry, 1.0, 0.0, y[0], y[1], face.swing)
         return (y[1], face.swing, moment - _radius(y[0], geometry.l1) * face.force)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def loads(t, y, f, q):
         p, geometry = q
         face = _driven_on_face(y[0], y[1], free(y[0], y[1], p), geometry)
@@ -107,19 +107,19 @@ def _driven_slide_walk(free):
     return make_walk(rhs, loads)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _paper_free(psi, dpsi, p):
     k, xi = p
     return paper_acceleration(psi, dpsi, k, xi)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _rigid_free(psi, dpsi, p):
     k, kappa = p
     return -kappa * k * math.sin(psi)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _rotor_on_face(y, p, geometry):
     """OnFace of the rotor model at its state (phi1, phi1', psi, psi', ...)."""
     k_cm, xi, j1, slope, idle = p
@@ -133,7 +133,7 @@ def _rotor_on_face(y, p, geometry):
                   geometry.j_c * reaction / _radius(psi, k))
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _rotor_slide_rhs(y, q):
     p, geometry = q
     k_cm, xi, j1, slope, idle = p
@@ -141,7 +141,7 @@ def _rotor_slide_rhs(y, q):
     return (y[1], face.rotor, y[3], face.swing, slope * (idle - y[1]) * y[1])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _rotor_slide_loads(t, y, f, q):
     p, geometry = q
     k_cm, xi, j1, slope, idle = p
@@ -174,7 +174,7 @@ def make_contacts(c):
     psi_of, dpsi_of = model.psi, model.dpsi
     rotor_angle, rotor_speed = model.rotor_angle, model.rotor_speed
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def store(states, n, t, y):
         states[n, T], states[n, PHI], states[n, W] = t, rotor_angle(t, y), rotor_speed(y)
         states[n, PSI], states[n, DPSI] = psi_of(y), dpsi_of(y)
@@ -222,14 +222,14 @@ def make_cycle_walk(system, contact):
     driven, slides = contact.model.driven, system.slide
     compose, rotor_angle = contact.model.compose, contact.model.rotor_angle
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def walk_state(s, phi0):
         """The walk's state (its work 0) from a logged state."""
         if driven:
             return (s[PSI], s[DPSI], 0.0)
         return (s[PHI] - phi0, s[W], s[PSI], s[DPSI], 0.0)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def walk(kind, q, y, t0, duration, local, out):
         if slides and kind == SLIDE:
             return slide_walk(q, y, t0, duration, local, out)

@@ -9,7 +9,7 @@ import math
 import numpy as np
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.elementary import jacobi_small, sincos_quadrant
 from kernels.impact.events import make_illinois
 
@@ -69,7 +69,7 @@ def paper_critical_speed(k, xi):
     return _speed_for_rise(rise_to_saddle(4.0 * k, (1.0 - k) ** 2, xi), xi)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _speed_for_rise(rise, xi):
     """The launch speed at psi = 0 whose swing rises g by ``rise``: v^2 = xi expm1(rise)."""
     return math.sqrt(xi * math.expm1(rise))
@@ -138,7 +138,7 @@ def _half_t(g, x, last):
     return 0.5 * g * ((1.0 - x) if last else (1.5 - 0.5 * x))
 
 
-_panel_half_t = njit(**INNER_OPTIONS)(_half_t)
+_panel_half_t = njit(**INLINE_OPTIONS)(_half_t)
 #: t/2 and its sine and cosine at every node of the first 40 panels, not last [0] and last
 #: [1] (the panels stop after ~25 even at the separatrix flag's 64 ulp)
 _PANEL_HALF_T = np.array([[[_half_t(0.25 * math.pi * 2.0 ** -j, x, last) for x in _GL_X]
@@ -209,7 +209,7 @@ def paper_half_period(v, k, xi, amplitude):
     return 2.0 * amplitude * total
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _paper_u_from_turning_point(amplitude, sin_a, cos_a, half, r, k, xi):
     """u at the node whose (A - psi)/2 = A r^2 (r = sin(t/2); see paper_half_period):
     g(X_A) - g(X) = -d X/(1 + xi X) - log1p_excess(y)/xi^2, d = X_A - X, y = xi d/(1 + xi X),
@@ -234,7 +234,7 @@ def _paper_flight_acceleration(psi, data):
     return k * x / (1.0 + xi * x) * (paper_u(psi, v, k, xi) + xi) * abs(math.sin(psi))
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _paper_peak_slope(psi, data):
     """sin(psi) d ln|psi''|/dpsi along a flight, for 0 < psi < pi: with u + xi =
     (v^2 + xi) e^(g0 - g(X)), |psi''| = k (v^2 + xi) e^g0 X e^-g(X) sin(psi)/(1 + xi X),
@@ -244,7 +244,7 @@ def _paper_peak_slope(psi, data):
     return _peak_slope_of_cosine(math.cos(psi), s, s, data)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _peak_slope_of_cosine(c, sin_a, sin_b, data):
     """_paper_peak_slope from c = cos psi, with sin^2 psi given as the product sin_a sin_b
     (sin psi twice, or 1 - c^2 and 1 for the scan's recurrence): one formula, each caller
@@ -322,13 +322,13 @@ def rigid_flight(v, omega2):
     return amplitude, tau1, omega2 * math.sin(min(amplitude, 0.5 * math.pi))
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def paper_critical(p):
     k, xi = p
     return paper_critical_speed(k, xi)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rigid_critical(p):
     k, kappa = p
     return 2.0 * math.sqrt(k * kappa)
@@ -369,7 +369,7 @@ def rigid_swing(y, p, window):
     return tau1, window / math.sqrt(u) if u > 0.0 else math.inf
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rigid_exact(y, h, p):
     """The rigid pendulum's state a time h on, exact to round-off (the closed-form flight's
     step): with X = sin(psi/2), Y = psi'/(2 Omega), Z = cos(psi/2) and m = X^2 + Y^2 (the
@@ -390,7 +390,7 @@ def rigid_exact(y, h, p):
     return y[0] + 2.0 * math.atan2(x1 * z - z1 * x, z1 * z + x1 * x), 2.0 * omega * v1
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rigid_exact_length(y, p, length):
     """The closed-form flight's step from y: ``length`` in the pendulum's own time, 1/Omega
     at rest and 1/sqrt(Omega^2 sin^2(psi/2) + psi'^2/4) in a fast swing, and at most
@@ -402,7 +402,7 @@ def rigid_exact_length(y, p, length):
     return length / max(1.0, rate)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rigid_speed_bound(y, p):
     """The largest |psi'| of the free motion from y: 2 Omega sqrt(m), m = sin^2(psi/2) +
     (psi'/(2 Omega))^2 its constant energy (rigid_exact), reached at psi = 0."""

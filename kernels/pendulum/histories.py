@@ -39,7 +39,7 @@ from collections import namedtuple
 
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import INLINE_OPTIONS, INNER_OPTIONS, KERNEL_OPTIONS
 from kernels.extrema import peak_search
 from kernels.impact.runge_kutta import METHOD_RK4, make_stepper
 from kernels.impact.tuples import relative_scales
@@ -209,21 +209,21 @@ def make_walk(rhs, loads):
 
 # ---------------------------------------------------------------- constant rotor speed
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _driven_loads(t, y, f, q):
     pendulum, geometry = q
     along, across, moment = hinge_and_moment(geometry, 1.0, 0.0, y[0], y[1], f[1])
     return Sample(y[0], y[1], f[1], t, along, across, moment)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _paper_rhs(y, q):
     (k, xi), geometry = q
     ddpsi = paper_acceleration(y[0], y[1], k, xi)
     return (y[1], ddpsi, hinge_and_moment(geometry, 1.0, 0.0, y[0], y[1], ddpsi)[2])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _rigid_rhs(y, q):
     (k, kappa), geometry = q
     ddpsi = -kappa * k * math.sin(y[0])
@@ -258,14 +258,14 @@ def driven_cycle(model, k, second, r, geometry, launch, interval, phases, out, l
 
 # ---------------------------------------------------------------- rotor of finite inertia
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _rotor_rhs(y, q):
     (k, xi, j1, slope, idle), geometry = q
     dw, ddpsi = rotor_accelerations(y[1], y[2], y[3], k, xi, j1, slope, idle)
     return (y[1], dw, y[3], ddpsi, slope * (idle - y[1]) * y[1])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _rotor_loads(t, y, f, q):
     (k, xi, j1, slope, idle), geometry = q
     along, across, moment = hinge_and_moment(geometry, y[1], f[1], y[2], y[3], f[3])

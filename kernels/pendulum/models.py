@@ -22,7 +22,7 @@ from collections import namedtuple
 
 from numba import njit
 
-from kernels import INNER_OPTIONS, KERNEL_OPTIONS
+from kernels import KERNEL_OPTIONS, INLINE_OPTIONS, INNER_OPTIONS
 from kernels.impact.tuples import relative_scales
 
 MODEL_PAPER, MODEL_RIGID, MODEL_ROTOR = 0, 1, 2
@@ -41,7 +41,7 @@ Model = namedtuple("Model", [
 
 def state_slot(index):
     """A reader of one coordinate of a model's state, ``read(y) -> y[index]``."""
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def read(y):
         return y[index]
 
@@ -57,19 +57,19 @@ def paper_acceleration(psi, dpsi, k, xi):
     return -k * x / (1.0 + xi * x) * (dpsi * dpsi + xi) * math.sin(psi)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def paper_rhs(y, p):
     k, xi = p
     return (y[1], paper_acceleration(y[0], y[1], k, xi))
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rigid_rhs(y, p):
     k, kappa = p
     return (y[1], -kappa * k * math.sin(y[0]))
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def paper_jacobian(y, p):
     """d(rhs)/dy of the paper's equation, row-major: a' = k dX/dpsi/(1 + xi X)^2."""
     psi, dpsi = y
@@ -81,42 +81,42 @@ def paper_jacobian(y, p):
     return (0.0, 1.0, -(dpsi * dpsi + xi) * (da * s + a * c), -2.0 * a * dpsi * s)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rigid_jacobian(y, p):
     k, kappa = p
     return (0.0, 1.0, -kappa * k * math.cos(y[0]), 0.0)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_tangent_state(c):
     """A perturbation in coordinates (dt, dphi1, dphi1', dpsi, dpsi') as the model's state
     perturbation (dpsi, dpsi'); the rotor angle is the time."""
     return (c[3], c[4])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_tangent_coordinates(dt, dy):
     """The coordinates of a perturbation dt of the time and dy of the state: the rotor
     angle moves with the time, its speed not at all."""
     return (dt, dt, 0.0, dy[0], dy[1])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_response_slope(y, j_phi, j_psi, dj_phi, dj_psi, p):
     return 0.0, 0.0
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_monitor(t, y, f):
     return y[0], f[0], f[1]
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_rotor_angle(t, y):
     return t
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_rotor_speed(y):
     return 1.0
 
@@ -124,25 +124,25 @@ def driven_rotor_speed(y):
 driven_psi, driven_dpsi = state_slot(0), state_slot(1)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_compose(t, phi1, w, psi, dpsi):
     """The state with these coordinates: the rotor angle is the time."""
     return phi1, (psi, dpsi)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_shift(t, y, angle):
     """The same state with the rotor angle (the time) measured from another origin."""
     return t + angle, y
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_starting_speed(p):
     """A driven rotor turns at the unit speed, whatever its compose is given."""
     return 1.0
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def driven_response(y, j_phi, j_psi, p):
     """M^-1 J^T up to scale for a rotor that does not move: the impulse changes psi' only."""
     return 0.0, 1.0
@@ -150,7 +150,7 @@ def driven_response(y, j_phi, j_psi, p):
 
 def driven_model(rhs, critical_speed, jacobian, swing, exact=None, exact_length=None,
                  speed_bound=None):
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def accelerations(t, y, p):
         return 0.0, rhs(y, p)[1]
 
@@ -226,17 +226,17 @@ def rotor_response_slope(y, j_phi, j_psi, dj_phi, dj_psi, p):
                   dj_psi - dm12 * x_phi)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rotor_tangent_state(c):
     return (c[1], c[2], c[3], c[4])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rotor_tangent_coordinates(dt, dy):
     return (dt, dy[0], dy[1], dy[2], dy[3])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rotor_rhs(y, p):
     k, xi, j1, slope, idle = p
     a1, b2 = rotor_accelerations(y[1], y[2], y[3], k, xi, j1, slope, idle)
@@ -252,12 +252,12 @@ def rotor_scales(y0, y1, rtol, atol):
             atol + rtol * max(abs(y0[3]), abs(y1[3])))
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rotor_monitor(t, y, f):
     return y[2], f[2], f[3]
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rotor_model_accelerations(t, y, p):
     k, xi, j1, slope, idle = p
     return rotor_accelerations(y[1], y[2], y[3], k, xi, j1, slope, idle)
@@ -272,7 +272,7 @@ def rotor_response(y, j_phi, j_psi, p):
     return (m22 * j_phi - m12 * j_psi) / det, (m11 * j_psi - m12 * j_phi) / det
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rotor_rotor_angle(t, y):
     return y[0]
 
@@ -280,29 +280,29 @@ def rotor_rotor_angle(t, y):
 rotor_rotor_speed, rotor_psi, rotor_dpsi = state_slot(1), state_slot(2), state_slot(3)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rotor_compose(t, phi1, w, psi, dpsi):
     return t, (phi1, w, psi, dpsi)
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rotor_shift(t, y, angle):
     """The same state with the rotor angle measured from another origin (the dynamics do
     not depend on it: phi1 is cyclic)."""
     return t, (y[0] + angle, y[1], y[2], y[3])
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def no_critical_speed(p):
     return math.inf  # no closed form: escape is an event of the flight
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def no_swing(y, p, window):
     return math.nan, math.inf  # the rotor's speed changes: no free swing repeats
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def rotor_starting_speed(p):
     """The rotor's idle speed (its motor's speed at no load) in omega1 units."""
     k, xi, j1, slope, idle = p

@@ -16,7 +16,7 @@ import math
 
 from numba import njit
 
-from kernels import INNER_OPTIONS
+from kernels import INLINE_OPTIONS
 from kernels.impact import Contact, System
 from kernels.impact.attractors import radical_inverse
 from kernels.impact.flight import make_flight
@@ -26,27 +26,27 @@ from kernels.impact.runge_kutta import OTHER_METHODS
 TWO_PI = 2.0 * math.pi
 #: the rotor stop's data (level, k): the stop's angle and k
 STOP_LEVEL, STOP_K = range(2)
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def never(t, y, data, p):
     return False
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def no_slope(t, y, data):
     return 0.0, 0.0  # a contact Jacobian that does not change with psi
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def no_edge(t, y, data):
     return math.inf
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _no_slide_tangent(tangent, d, t, y, data, t1, y1, data1, p, settings):
     return True  # the tool has no slide
 
 
-@njit(**INNER_OPTIONS)
+@njit(**INLINE_OPTIONS)
 def _settle_in_place(tangent, d, t, y, data, p, r):
     return True, t, y  # the accumulated law acts where the contact is
 
@@ -56,7 +56,7 @@ def stop_section_start(model):
     rotor-stop cycle from its key, (phi1', psi') at psi = 0, the rotor angle at 0."""
     compose = model.compose
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def start(key, data, p):
         t, y = compose(0.0, 0.0, key[0], 0.0, key[1])
         return t, y, data
@@ -70,20 +70,20 @@ def stop_flight(model, methods=OTHER_METHODS):
     ``methods``: those compiled in beside DOPRI5 (System)."""
     psi_of, monitor = model.psi, model.monitor
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def values(t, y, data):
         return psi_of(y) - data[STOP_LEVEL], psi_of(y) + math.pi
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def rates(t, y, dy, data):
         rate = monitor(t, y, dy)[1]
         return rate, rate
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def on_event(e, t, y, f, data, p):
         return True, data
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def start_gap(t, y, f, data, p):
         angle, rate, accel = monitor(t, y, f)
         return rate, accel
@@ -101,7 +101,7 @@ def rotor_stop(model, methods=OTHER_METHODS):
     starting_speed = model.starting_speed
     flight = stop_flight(model, methods)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def first(p, data, start):
         """Start 0: at rest on the stop, the rotor at its starting speed: the first impact
         at once. Start j: arriving at the stop with psi' = 2 (1 + k) x_j (Halton point in
@@ -110,52 +110,52 @@ def rotor_stop(model, methods=OTHER_METHODS):
         t, y = compose(0.0, 0.0, starting_speed(p), 0.0, speed)
         return t, y, data
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def key(t, y, data, p):
         return rotor_speed(y), dpsi_of(y)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def from_key(key, t, y, data, p):
         """The pre-impact state with this key, at the rotor angle of (t, y)."""
         return compose(t, rotor_angle(t, y), key[0], 0.0, key[1])
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def jacobian(t, y, data):
         return 1.0 + data[STOP_K], 1.0
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def normal_speed(t, y, data, p):
         return (1.0 + data[STOP_K]) * rotor_speed(y) + dpsi_of(y)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def normal_acceleration(t, y, data, p):
         return abs(accelerations(t, y, p)[1])
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def gap_rate_after(t, y, data, p):
         """psi' after the impact: the pendulum must leave the stop (psi' < 0); a light rotor
         thrown back by the impact leaves it at rest or pushes it on (degenerate)."""
         return dpsi_of(y)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def settle(t, y, data, p, dt):
         return t, y
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def no_slide(t, y, data, p, settings, refine):
         return True, t, y, data, 0.0, 0.0, NO_COST
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def flight_data(data):
         return data
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def escapes_before(t, y, data, p):
         """A driven pendulum launched from the stop faster than its critical speed goes
         over the top: decided in closed form, not by a horizon (H1, H2, H12)."""
         return -dpsi_of(y) >= critical_speed(p)
 
-    @njit(**INNER_OPTIONS)
+    @njit(**INLINE_OPTIONS)
     def event_gradient(t, y, data):
         return 0.0, 1.0, 0.0  # g = psi - stop
 
