@@ -5,10 +5,11 @@ runs). Wall and CPU seconds (the children's), pytest's own test time, the warm-u
 and the load average before and after each, since a shared machine stretches wall times.
 
 Run: .venv/bin/python benchmarks/bench_test_loop.py [--skip-full]
+     .venv/bin/python benchmarks/bench_test_loop.py --skip-fast
      (writes benchmarks/results/test_loop.json; with --skip-full the whole suite's last
-     record stays, with the commit it measured)
-     .venv/bin/python benchmarks/bench_test_loop.py --against DIR [--label L] [--rounds N]
-     [TEST ...]
+     record stays, with --skip-fast the fast loop's, each with the commit it measured)
+     .venv/bin/python benchmarks/bench_test_loop.py --against DIR [--shared-cache] [--label L]
+     [--rounds N] [TEST ...]
      (the same tests, warm, in this tree and in another checkout's tree DIR (a `git
      worktree` of an older commit, its kernels in a cache of their own), interleaved, on
      the children's CPU time: tells a slower machine from a slower code; writes
@@ -83,16 +84,22 @@ AGAINST_TESTS = ("tests/test_hostile_inputs.py", "tests/test_spec_cli.py",
                  "tests/test_docs.py::test_the_tutorial_runs_as_written")
 
 
-def against(tree: Path, tests: list[str], rounds: int, label: str) -> None:
+def against(tree: Path, tests: list[str], rounds: int, label: str,
+            shared_cache: bool = False) -> None:
     """Warm runs of ``tests`` here and in ``tree``, interleaved after one run each that
-    fills the caches; medians of the children's CPU seconds."""
+    fills the caches; medians of the children's CPU seconds. With ``shared_cache`` (the
+    two trees' kernels are the same code, only the tests differ) ``tree`` runs on this
+    tree's compile cache, whose entries are keyed by content (kernels/cache.py), and no
+    run fills it first: the warm-up (``python -m tests.warmup --slow``) has."""
+    # the default modules' fast tests; tests named on the command line run whatever marks them
+    marks = ["-m", "not slow"] if tuple(tests) == AGAINST_TESTS else []
     command = [sys.executable, "-m", "pytest", "-q", "--no-warmup", "-p", "no:cacheprovider",
-               "-m", "not slow", *tests]
+               *marks, *tests]
     with tempfile.TemporaryDirectory() as cache:
         trees = {"this": (ROOT, None),
-                 "other": (tree, dict(os.environ, NUMBA_CACHE_DIR=cache,
-                                      PYTHONPATH=str(tree)))}
-        for cwd, env in trees.values():
+                 "other": (tree, dict(os.environ, PYTHONPATH=str(tree),
+                                      **({} if shared_cache else {"NUMBA_CACHE_DIR": cache})))}
+        for cwd, env in trees.values() if not shared_cache else ():
             timed(command, cwd, env)
         runs = {name: [] for name in trees}
         for _ in range(rounds):
@@ -102,7 +109,8 @@ def against(tree: Path, tests: list[str], rounds: int, label: str) -> None:
     this, other = (statistics.median(r["cpu_s"] for r in runs[n]) for n in ("this", "other"))
     results = {"machine": platform.node(), "cores": os.cpu_count(),
                "measured": time.strftime("%Y-%m-%d"), "against": str(tree),
-               "tests": tests, "rounds": rounds, "median_this_cpu_s": this,
+               "tests": tests, "rounds": rounds, "shared_cache": shared_cache,
+               "median_this_cpu_s": this,
                "median_other_cpu_s": other, "ratio_other_over_this": other / this,
                "runs": runs}
     path = HERE / "results" / ("test_loop_against" + (f"_{label}" if label else "") + ".json")
@@ -114,29 +122,42 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--skip-full", action="store_true",
                         help="measure the fast loop only")
+    parser.add_argument("--skip-fast", action="store_true",
+                        help="measure the whole suite only")
     parser.add_argument("--against", type=Path, help="another checkout's tree")
+    parser.add_argument("--shared-cache", action="store_true",
+                        help="with --against: the same kernels, this tree's compile cache")
     parser.add_argument("--label", default="")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("tests", nargs="*", default=list(AGAINST_TESTS))
     args = parser.parse_args()
     if args.against:
-        against(args.against.resolve(), args.tests, args.rounds, args.label)
+        against(args.against.resolve(), args.tests, args.rounds, args.label,
+                args.shared_cache)
         return
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
                           capture_output=True, text=True).stdout.strip()
     results = {"machine": platform.node(), "cores": os.cpu_count(), "commit": head,
                "measured": time.strftime("%Y-%m-%d")}
-    with tempfile.TemporaryDirectory() as tmp:
-        clone = fresh_clone(Path(tmp))
-        results["fast_cold"] = timed(["./tasks", "test", "--fast", DURATIONS], clone)
-        results["fast_warm"] = timed(["./tasks", "test", "--fast", DURATIONS], clone)
-        print(json.dumps(results, indent=1), flush=True)
     path = HERE / "results" / "test_loop.json"
+    earlier = json.loads(path.read_text()) if path.exists() else {}
+    if args.skip_fast:
+        # the fast loop's last measurement is kept, with the commit it measured
+        for name in ("fast_cold", "fast_warm"):
+            if name in earlier:
+                results[name] = {"commit": earlier["commit"], **earlier[name]}
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            clone = fresh_clone(Path(tmp))
+            for name in ("fast_cold", "fast_warm"):
+                results[name] = {"commit": head,
+                                 **timed(["./tasks", "test", "--fast", DURATIONS], clone)}
+            print(json.dumps(results, indent=1), flush=True)
     if not args.skip_full:
         with tempfile.TemporaryDirectory() as tmp:
             results["full_cold"] = {"commit": head, **timed(["./tasks", "test", DURATIONS],
                                                             fresh_clone(Path(tmp)))}
-    elif path.exists() and "full_cold" in (earlier := json.loads(path.read_text())):
+    elif "full_cold" in earlier:
         # the whole suite's last measurement is kept, with the commit it measured
         results["full_cold"] = {"commit": earlier["commit"], **earlier["full_cold"]}
     path.write_text(json.dumps(results, indent=1) + "\n")

@@ -2,8 +2,11 @@
 whose results are gone fails), the tutorial's and the README's code runs as written, and the
 README stays a front door (issue 35)."""
 
+import contextlib
+import io
 import os
 import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -57,9 +60,35 @@ def _run_block(kind, body, where, env, namespace) -> None:
         line = line.split("  #")[0].strip()
         if not line or line.startswith("#"):
             continue
+        words = shlex.split(line)
+        if words[0] == "sweep" and not set(words) & SHELL:
+            code, stderr = sweep_in_process(words[1:])
+            assert code == 0, f"{line}\n{stderr}"
+            continue
         done = subprocess.run(line, shell=True, cwd=where, env=env, capture_output=True,
                               text=True)
         assert done.returncode == 0, f"{line}\n{done.stderr}"
+
+
+#: words that make a line the shell's to run (a pipe, a redirection, a sequence)
+SHELL = {"|", ">", ">>", "<", "&&", "||", ";", "&"}
+
+
+def sweep_in_process(args: list[str]) -> tuple[int, str]:
+    """A `sweep` command line through the console script's own function (sweep.cli.main),
+    in this process: its exit code and what it wrote to stderr. The walk-throughs' commands
+    so share one interpreter's imports and loaded kernels instead of paying them at every
+    line; the command itself, its parsing, its errors and its exit code are the script's."""
+    from sweep.cli import main
+
+    stderr, stdout = io.StringIO(), io.StringIO()
+    code = 0
+    with contextlib.redirect_stderr(stderr), contextlib.redirect_stdout(stdout):
+        try:
+            main(args)
+        except SystemExit as done:
+            code = done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
+    return code, stderr.getvalue()
 
 
 def test_the_documentation_builds_strictly(tmp_path):
