@@ -61,7 +61,7 @@ def _run_block(kind, body, where, env, namespace) -> None:
         if not line or line.startswith("#"):
             continue
         words = shlex.split(line)
-        if words[0] == "sweep" and not set(words) & SHELL:
+        if words[0] == "sweep" and not SHELL.search(QUOTED.sub("", line)):
             code, stderr = sweep_in_process(words[1:])
             assert code == 0, f"{line}\n{stderr}"
             continue
@@ -70,8 +70,10 @@ def _run_block(kind, body, where, env, namespace) -> None:
         assert done.returncode == 0, f"{line}\n{done.stderr}"
 
 
-#: words that make a line the shell's to run (a pipe, a redirection, a sequence)
-SHELL = {"|", ">", ">>", "<", "&&", "||", ";", "&"}
+#: what makes a line the shell's to run, outside quotes: a pipe, a redirection, a sequence,
+#: a subshell, an expansion or a glob
+SHELL = re.compile(r"[|&;<>()$`*?~\[]")
+QUOTED = re.compile(r"'[^']*'|\"[^\"]*\"")
 
 
 def sweep_in_process(args: list[str]) -> tuple[int, str]:
