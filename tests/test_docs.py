@@ -2,8 +2,6 @@
 whose results are gone fails), the tutorial's and the README's code runs as written, and the
 README stays a front door (issue 35)."""
 
-import contextlib
-import io
 import os
 import re
 import shlex
@@ -12,6 +10,8 @@ import sys
 from pathlib import Path
 
 import pytest
+
+from tests.command_line import run_sweep
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = Path(sys.executable).parent
@@ -62,7 +62,7 @@ def _run_block(kind, body, where, env, namespace) -> None:
             continue
         words = shlex.split(line)
         if words[0] == "sweep" and not SHELL.search(QUOTED.sub("", line)):
-            code, stderr = sweep_in_process(words[1:])
+            code, _, stderr = run_sweep(words[1:])
             assert code == 0, f"{line}\n{stderr}"
             continue
         done = subprocess.run(line, shell=True, cwd=where, env=env, capture_output=True,
@@ -74,23 +74,6 @@ def _run_block(kind, body, where, env, namespace) -> None:
 #: a subshell, an expansion or a glob
 SHELL = re.compile(r"[|&;<>()$`*?~\[]")
 QUOTED = re.compile(r"'[^']*'|\"[^\"]*\"")
-
-
-def sweep_in_process(args: list[str]) -> tuple[int, str]:
-    """A `sweep` command line through the console script's own function (sweep.cli.main),
-    in this process: its exit code and what it wrote to stderr. The walk-throughs' commands
-    so share one interpreter's imports and loaded kernels instead of paying them at every
-    line; the command itself, its parsing, its errors and its exit code are the script's."""
-    from sweep.cli import main
-
-    stderr, stdout = io.StringIO(), io.StringIO()
-    code = 0
-    with contextlib.redirect_stderr(stderr), contextlib.redirect_stdout(stdout):
-        try:
-            main(args)
-        except SystemExit as done:
-            code = done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
-    return code, stderr.getvalue()
 
 
 def test_the_documentation_builds_strictly(tmp_path):
